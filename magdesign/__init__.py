@@ -1,0 +1,17 @@
+"""magdesign: differentiable design of magnetic tactile sensors in JAX.
+
+All quantities are SI (m, T, N, Pa, s, A). Importing the package turns on JAX's
+float64 mode (``jax_enable_x64``): every function computes in float64 unless it is
+handed float32 arrays explicitly.
+"""
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+from magdesign import fields as fields  # noqa: E402
+from magdesign import mechanics as mechanics  # noqa: E402
+from magdesign import transducers as transducers  # noqa: E402
+from magdesign import units as units  # noqa: E402
+
+__version__ = "0.1.0"

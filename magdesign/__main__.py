@@ -1,0 +1,3 @@
+from magdesign.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,1 @@
+"""Mechanics: materials, elastomer layers and domes (SI: m, N, Pa)."""
