@@ -7,6 +7,7 @@ gradient of the discarded branch can be NaN (a NaN in the discarded branch of a 
 ``jnp.where`` still poisons the gradient).
 """
 
+import jax
 import jax.numpy as jnp
 
 # Relative size below which a denominator counts as zero. Chosen far below any
@@ -58,3 +59,58 @@ def safe_log(x, at_zero=0.0):
     """log(x) for x > 0; ``at_zero`` with a zero gradient where x <= 0 (log's pole)."""
     bad = x <= 0.0
     return jnp.where(bad, at_zero, jnp.log(jnp.where(bad, 1.0, x)))
+
+
+# Thresholds of the design solver (magdesign.design.solve). All act on dimensionless
+# quantities: variables scaled to their bound width, residuals scaled by their target.
+# Default tolerance on scaled target and limit residuals: 1e-10 leaves a margin of 10 below
+# the 1e-9 relative accuracy the designs are checked to, and far above the 1e-15 that the
+# final Newton polish reaches.
+DESIGN_RTOL = 1e-10
+# Default step tolerance in scaled variables: a converged step in a [0, 1] box.
+DESIGN_ATOL = 1e-13
+# Quadratic-penalty weight on scaled residuals, the objective being scaled to a unit gradient:
+# the penalty phase only finds the active set (its answer is off by about 1 / DESIGN_PENALTY,
+# which the exact polish removes); a larger weight makes its merit function too steep to
+# cross quickly.
+DESIGN_PENALTY = 1e4
+# A limit closer to active than this after the penalty phase (10 times its typical error)
+# is tried as active by the exact polish, which drops it again if its multiplier has the
+# wrong sign.
+DESIGN_ACTIVE_TOL = 1e-3
+# Levenberg-Marquardt damping, relative to the largest curvature: first value and the cap
+# beyond which a search counts as stalled.
+DESIGN_DAMPING_START = 1e-3
+DESIGN_DAMPING_MAX = 1e10
+
+
+# Width of the smoothed contact ramp, as a fraction of the length it is applied to (the
+# wall thickness of a dome): small enough that the smoothing moves contact forces by far
+# less than the penalty's own penetration (about 1 % of the wall), large enough that the
+# ramp stays a smooth (C-infinity) function in float64 for Newton and design gradients.
+CONTACT_SMOOTHING = 1e-5
+
+# Load below which a secant stiffness is evaluated at this floor instead, as a fraction
+# of the structure's own force scale (shear modulus x thickness^2): the secant
+# displacement / force is 0 / 0 at zero load; its limit, the tangent compliance at zero
+# load, is returned instead (the secant at 1e-6 of the force scale equals it to ~1e-6).
+ZERO_LOAD_FRACTION = 1e-6
+
+
+def smooth_ramp(x, width):
+    """max(x, 0) smoothed over ``width``: width * softplus(x / width).
+
+    Singularity: the kink of max(x, 0) at x = 0 (contact opening and closing), which
+    would make Newton's method cycle and design gradients jump. Returns width * log 2 at
+    x = 0, x + O(width e^(-x/width)) above and width e^(x/width) below: always positive
+    with a positive slope, so a contact force built on it is never exactly zero.
+    """
+    return width * jax.nn.softplus(x / width)
+
+
+# Step tolerances of the least-squares solves of magdesign.inverse, whose unknowns are
+# scaled to order one there (displacements in units of the wanted resolution, fitted
+# constants as factors on their start values): far below any resolution asked for,
+# far above float64's rounding (1e-16) so that the solvers terminate.
+LSQ_RTOL = 1e-10
+LSQ_ATOL = 1e-10
