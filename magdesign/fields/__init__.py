@@ -3,3 +3,6 @@
 from magdesign.fields.film import film as film
 from magdesign.fields.film import film_angle as film_angle
 from magdesign.fields.film import film_magnitude as film_magnitude
+from magdesign.fields.cylinder import cylinder as cylinder
+from magdesign.fields.cylinder import cylinder_on_axis as cylinder_on_axis
+from magdesign.fields.dipole import dipole as dipole
