@@ -114,3 +114,56 @@ def smooth_ramp(x, width):
 # far above float64's rounding (1e-16) so that the solvers terminate.
 LSQ_RTOL = 1e-10
 LSQ_ATOL = 1e-10
+
+# Step of the central-difference Jacobian of magdesign.inverse's forward models, in the
+# solver's scaled unknowns (units of the wanted resolution, 1-100 um): the exact field
+# kernel's own derivative takes XLA tens of seconds to compile per copy, and a least-squares
+# solver holds several. At 1e-2 resolutions (0.01-1 um, against field length scales of
+# millimetres) the truncation error (step / length)^2 and the rounding error
+# (1e-16 / step, relative) both stay below 1e-8 of the Jacobian.
+FD_JACOBIAN_STEP = 1e-2
+
+
+# Solver thresholds of the axisymmetric dome (magdesign.mechanics._axisymmetric).
+# Newton stops after a step shorter than this fraction of the wall thickness: Newton
+# converges quadratically there, so the state it leaves is exact to float64 rounding
+# (a looser 1e-6 would leave ~1e-12 relative errors, which central differences at
+# 1e-5 steps would amplify to 1e-7).
+DOME_NEWTON_TOL = 1e-9
+# The line search accepts a step that raises the potential by at most this fraction of
+# its magnitude: near convergence the decrease Newton predicts falls below float64's
+# rounding of the potential (a sum of ~100 element energies, ~1e-15 relative), and an
+# exact Armijo test would reject good steps.
+DOME_LINE_SEARCH_SLACK = 1e-12
+# First Levenberg shift (tried only when the tangent matrix is not positive definite,
+# e.g. while a load step passes through a buckling-like intermediate state), as a
+# fraction of its largest diagonal entry; it grows tenfold until a Cholesky succeeds.
+DOME_LEVENBERG_START = 1e-6
+
+# Step of the central-difference Jacobian of magdesign.inverse's calibration, in its
+# unknowns (factors on the constants' start values, order one): truncation (1e-12) and
+# rounding (1e-16 / 1e-6 = 1e-10) errors both far below the 1e-6 it is asked to recover.
+FD_CALIBRATION_STEP = 1e-6
+
+
+def float_array(x):
+    """``x`` as a floating-point array: float32 stays float32 (a documented, tested option
+    of the field kernels), anything else becomes float64."""
+    x = jnp.asarray(x)
+    return x if x.dtype == jnp.float32 else x.astype(jnp.float64)
+
+
+def safe_atan2(y, x):
+    """atan2(y, x) with a finite gradient however small (x, y) are.
+
+    Singularity: the derivative (-y, x) / (x^2 + y^2) underflows to 0/0 once x and y are
+    below ~1e-154 (the field deep below a film, k z > ~350), and is a true 0/0 at the
+    origin. Dividing both by the larger magnitude leaves the angle unchanged and keeps the
+    squares of order 1; at (0, 0) it returns 0 with a zero gradient. The scale is held
+    constant for differentiation: the angle does not depend on it, and its own derivative
+    would bring back the tiny squares (flushed to zero on CPU).
+    """
+    scale = jax.lax.stop_gradient(jnp.maximum(jnp.abs(x), jnp.abs(y)))
+    is_zero = scale == 0.0
+    safe_scale = jnp.where(is_zero, 1.0, scale)
+    return jnp.where(is_zero, 0.0, jnp.arctan2(y / safe_scale, jnp.where(is_zero, 1.0, x / safe_scale)))

@@ -26,10 +26,13 @@ RSQRT_NEWTON_STEPS = 4
 
 @jax.custom_jvp
 def rsqrt(x):
-    """1/sqrt(x) (float64, x > 0) from multiply-adds only; fuses into any XLA CPU loop.
+    """1/sqrt(x) (x > 0) from multiply-adds only in float64, so it fuses into any XLA CPU
+    loop; float32 takes the native rsqrt.
 
     At x = 0 it returns a large finite number (so x * rsqrt(x) = 0 there).
     """
+    if x.dtype == jnp.float32:
+        return jax.lax.rsqrt(x)
     bits = jax.lax.bitcast_convert_type(x, jnp.int64)
     y = jax.lax.bitcast_convert_type(RSQRT_MAGIC - (bits >> 1), jnp.float64)
     half_x = 0.5 * x

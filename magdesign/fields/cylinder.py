@@ -19,7 +19,7 @@ import math
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from magdesign._numerics import double_where, safe_sqrt
+from magdesign._numerics import double_where, float_array, safe_sqrt
 from magdesign._validation import check_last_axis, check_positive
 from magdesign.fields._special import (
     KC_MIN,
@@ -124,7 +124,7 @@ def cylinder(
         raise ValueError(f"fidelity must be one of {FIDELITIES}, got {fidelity!r}")
     check_last_axis("points", points, 3)
     check_positive(radius=radius, height=height)
-    points = jnp.asarray(points, dtype=float)
+    points = float_array(points)
     if fidelity == "dipole":
         moment = polarization * jnp.pi * radius**2 * height / MU0
         return dipole(points, jnp.stack([jnp.zeros_like(moment), jnp.zeros_like(moment), moment], axis=-1))
@@ -161,7 +161,7 @@ def cylinder_on_axis(
         the same sign (no cancellation at any distance), and as written where they differ.
     """
     check_positive(radius=radius, height=height)
-    z = jnp.asarray(z, dtype=float)
+    z = float_array(z)
     u = height + z
     s_u = jnp.sqrt(radius**2 + u * u)
     s_v = jnp.sqrt(radius**2 + z * z)

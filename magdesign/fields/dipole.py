@@ -3,7 +3,7 @@
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from magdesign._numerics import safe_div, safe_sqrt
+from magdesign._numerics import float_array, safe_div, safe_sqrt
 from magdesign._validation import check_last_axis
 from magdesign.units import MU0
 
@@ -23,8 +23,8 @@ def dipole(points: Float[ArrayLike, "... 3"], moment: Float[ArrayLike, "... 3"])
     """
     check_last_axis("points", points, 3)
     check_last_axis("moment", moment, 3)
-    points = jnp.asarray(points, dtype=float)
-    moment = jnp.asarray(moment, dtype=float)
+    points = float_array(points)
+    moment = float_array(moment)
     inv_r2 = safe_div(1.0, jnp.sum(points * points, axis=-1, keepdims=True))
     inv_r3 = inv_r2 * safe_sqrt(inv_r2)
     m_dot_r = jnp.sum(moment * points, axis=-1, keepdims=True)

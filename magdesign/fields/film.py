@@ -13,6 +13,7 @@ only; shear moves it in x and changes the field angle only.
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from magdesign._numerics import safe_atan2
 from magdesign._validation import check_positive
 
 
@@ -58,6 +59,7 @@ def film_angle(bx: Float[ArrayLike, "..."], bz: Float[ArrayLike, "..."]) -> Floa
     """Field angle atan2(Bx, Bz) (rad) in (-pi, pi]: equals kx for |kx| < pi.
 
     Use this, never arctan(Bx / Bz): it is finite and exact at kx = +-pi/2 where
-    Bz = 0, and it keeps the quadrant beyond.
+    Bz = 0, and it keeps the quadrant beyond. Its gradient stays finite however weak
+    the field (:func:`magdesign._numerics.safe_atan2`); at Bx = Bz = 0 it returns 0.
     """
-    return jnp.arctan2(bx, bz)
+    return safe_atan2(bx, bz)
