@@ -1,26 +1,84 @@
-"""The ``magdesign`` command (also ``python -m magdesign``)."""
+"""The ``magdesign`` command (also ``python -m magdesign``).
+
+    magdesign solve [SPEC.toml] [--json] [--fidelity LEVEL] [--plot FILE]
+    magdesign simulate SPEC.toml [--json]
+    magdesign accuracy [--json] [--plot FILE]
+
+Exit codes: 0 done (solve: solved), 2 bad spec or arguments (one line naming the key),
+3 solve not successful (the status and the violated target are printed).
+"""
 
 import argparse
+import json
 import sys
+
+import jax
+
+from magdesign import accuracy
+from magdesign.design import solve as solve_problem
+from magdesign.design.plot import plot_design
+from magdesign.design.spec import default_spec, load_spec, problem_from_spec
+from magdesign.scene import loads_from_spec, scene_from_spec, simulate, simulation_json, simulation_table
+from magdesign.units import SpecError
+
+EXIT_BAD_SPEC = 2
+EXIT_NOT_SOLVED = 3
 
 
 def build_parser():
-    parser = argparse.ArgumentParser(prog="magdesign", description="Design magnetic tactile sensors.")
+    parser = argparse.ArgumentParser(prog="magdesign", description="Design magnetic tactile sensors by differentiable optimisation.")
     sub = parser.add_subparsers(dest="command", required=True)
-    solve = sub.add_parser("solve", help="solve a design (default: the seed-001 dome with a Hall sensor)")
-    solve.add_argument("spec", nargs="?", help="design spec (TOML)")
-    solve.add_argument("--json", action="store_true", help="print one JSON object")
+
+    solve = sub.add_parser("solve", help="solve a design spec (default: the seed-001 dome with a Hall sensor)")
+    solve.add_argument("spec", nargs="?", help="design spec (TOML); the built-in default design if omitted")
+    solve.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+    solve.add_argument("--fidelity", help="mechanics fidelity level, overriding the spec (e.g. reissner, axisymmetric)")
+    solve.add_argument("--plot", metavar="FILE", help="write a PNG of the targets and limits around the design")
+
+    simulate_cmd = sub.add_parser("simulate", help="run a scene's forward chain over its load sweep")
+    simulate_cmd.add_argument("spec", help="scene or design spec (TOML); a design spec simulates its start point")
+    simulate_cmd.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+
+    accuracy_cmd = sub.add_parser("accuracy", help="measure every model's error against its time, on this machine")
+    accuracy_cmd.add_argument("--json", action="store_true", help="print a JSON list of rows instead of the table")
+    accuracy_cmd.add_argument("--plot", metavar="FILE", help="write a PNG of error against time (log-log)")
     return parser
+
+
+def run_solve(args):
+    spec = load_spec(args.spec) if args.spec else default_spec()
+    problem, _ = problem_from_spec(spec, fidelity=args.fidelity)
+    result = solve_problem(problem)
+    print(json.dumps(result.to_json()) if args.json else result.table())
+    if args.plot:
+        plot_design(problem, result, args.plot)
+    return 0 if result.status == "successful" else EXIT_NOT_SOLVED
+
+
+def run_simulate(args):
+    spec = load_spec(args.spec)
+    scene = scene_from_spec(spec)
+    result = simulate(scene, loads_from_spec(spec), key=jax.random.key(0))
+    print(json.dumps(simulation_json(result)) if args.json else simulation_table(result))
+    return 0
+
+
+def run_accuracy(args):
+    rows = accuracy.measure(progress=None if args.json else sys.stderr)
+    print(json.dumps([row._asdict() for row in rows]) if args.json else accuracy.table(rows))
+    if args.plot:
+        accuracy.plot(rows, args.plot)
+    return 0
 
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
-    if args.command == "solve":
-        from magdesign.fields.cylinder import report_saturation_distance  # placeholder until design/
-
-        print(report_saturation_distance())
-        return 0
-    return 2
+    command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy}[args.command]
+    try:
+        return command(args)
+    except (SpecError, ValueError) as error:
+        print(f"magdesign {args.command}: {error}", file=sys.stderr)
+        return EXIT_BAD_SPEC
 
 
 if __name__ == "__main__":

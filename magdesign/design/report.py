@@ -1,0 +1,213 @@
+"""Results of the design solver: a JSON-ready record and a readable table."""
+
+import equinox as eqx
+import numpy as np
+
+from magdesign.units import convert
+
+# The solver's outcomes; optimistix RESULTS names where one fits.
+STATUS_NAMES = ("successful", "infeasible_target", "limit_violated", "max_steps_reached", "nonfinite")
+
+
+def _keys(problem):
+    """Names of the theta entries: each target's output, then "output.side" per limit row."""
+    return [t.output for t in problem.targets] + [
+        f"{problem.limits[i].output}.{side}" for i, side in problem.limit_rows
+    ]
+
+
+def _shown(value, unit):
+    return f"{convert(value, unit):.6g} {unit}" if unit else f"{value:.6g}"
+
+
+class DesignResult(eqx.Module):
+    """One solved design (SI values, Python floats).
+
+    Attributes:
+        status: "successful", or why not: "infeasible_target" (see ``violated``),
+            "limit_violated", "max_steps_reached", "nonfinite".
+        parameters: {variable: value}.
+        targets: {output: {"target": value, "achieved": value}}.
+        limits: {output: {"upper" and/or "lower": bound, "achieved": value, "active": bool}}.
+        active_bounds: {variable: "lower" | "upper"} for variables held on a bound.
+        derivatives: {key: {variable: d parameter / d key}}, key a target's output (d/d its
+            value) or "output.upper" / "output.lower" for an active limit's bound.
+        violated: names of the targets and limits not met.
+        outputs: the model outputs named by the problem (targets, limits, objective, report).
+        steps: solver steps, all phases; seconds: wall time of the solve.
+    """
+
+    status: str
+    parameters: dict
+    targets: dict
+    limits: dict
+    active_bounds: dict
+    derivatives: dict
+    violated: tuple
+    outputs: dict
+    steps: int
+    seconds: float
+    units: dict
+
+    @classmethod
+    def from_core(cls, problem, solution, theta, seconds, rtol):
+        # Python lists first: indexing numpy arrays element by element costs more than
+        # the solve itself on small problems.
+        theta, x, values, residuals, active_rows, at_lower, at_upper, derivatives = (
+            np.asarray(a).tolist()
+            for a in (
+                theta,
+                solution.x,
+                solution.outputs,
+                solution.residuals,
+                solution.active_limits,
+                solution.at_lower,
+                solution.at_upper,
+                solution.derivatives,
+            )
+        )
+        names = [v.name for v in problem.variables]
+        n_targets = len(problem.targets)
+        outputs = dict(zip(problem.outputs, values))
+        targets = {
+            t.output: {"target": theta[k], "achieved": outputs[t.output]} for k, t in enumerate(problem.targets)
+        }
+        limits = {}
+        for k, (i, side) in enumerate(problem.limit_rows):
+            limit = problem.limits[i]
+            entry = limits.setdefault(limit.output, {"achieved": outputs[limit.output], "active": False})
+            entry[side] = theta[n_targets + k]
+            entry["active"] = entry["active"] or active_rows[k]
+        keys = _keys(problem)
+        derivatives = {
+            key: {name: derivatives[j][column] for j, name in enumerate(names)}
+            for column, key in enumerate(keys)
+            if column < n_targets or active_rows[column - n_targets]
+        }
+        active_bounds = {
+            name: ("lower" if at_lower[j] else "upper") for j, name in enumerate(names) if at_lower[j] or at_upper[j]
+        }
+        violated = tuple(
+            key for k, key in enumerate(keys) if (abs(residuals[k]) if k < n_targets else residuals[k]) > float(rtol)
+        )
+        units = {v.name: v.unit for v in problem.variables}
+        units.update({t.output: t.unit for t in problem.targets})
+        units.update({lim.output: lim.unit for lim in problem.limits})
+        return cls(
+            status=STATUS_NAMES[int(solution.status)],
+            parameters=dict(zip(names, x)),
+            targets=targets,
+            limits=limits,
+            active_bounds=active_bounds,
+            derivatives=derivatives,
+            violated=violated,
+            outputs=outputs,
+            steps=int(solution.steps),
+            seconds=float(seconds),
+            units=units,
+        )
+
+    @property
+    def successful(self) -> bool:
+        return self.status == "successful"
+
+    def to_json(self) -> dict:
+        """The JSON object of DESIGN.md section 3, plus limits, active bounds, derivatives."""
+        return {
+            "status": self.status,
+            "parameters": dict(self.parameters),
+            "targets": {k: dict(v) for k, v in self.targets.items()},
+            "steps": self.steps,
+            "seconds": self.seconds,
+            "limits": {k: dict(v) for k, v in self.limits.items()},
+            "active_bounds": dict(self.active_bounds),
+            "violated": list(self.violated),
+            "derivatives": {k: dict(v) for k, v in self.derivatives.items()},
+        }
+
+    def table(self) -> str:
+        """A readable report: parameters, targets, limits, status and time."""
+        unit = lambda name: self.units.get(name)  # noqa: E731
+        lines = ["parameter        value"]
+        for name, value in self.parameters.items():
+            bound = f"  (on {self.active_bounds[name]} bound)" if name in self.active_bounds else ""
+            lines.append(f"  {name:<15}{_shown(value, unit(name))}{bound}")
+        if self.targets:
+            lines.append("target           wanted          achieved        met")
+            for name, t in self.targets.items():
+                met = "no" if name in self.violated else "yes"
+                lines.append(
+                    f"  {name:<15}{_shown(t['target'], unit(name)):<16}{_shown(t['achieved'], unit(name)):<16}{met}"
+                )
+        if self.limits:
+            lines.append("limit            bound           achieved        active")
+            for name, lim in self.limits.items():
+                bounds = " ".join(
+                    f"{'<=' if side == 'upper' else '>='} {_shown(lim[side], unit(name))}"
+                    for side in ("upper", "lower")
+                    if side in lim
+                )
+                active = "yes" if lim["active"] else "no"
+                lines.append(f"  {name:<15}{bounds:<16}{_shown(lim['achieved'], unit(name)):<16}{active}")
+        violated = f" (not met: {', '.join(self.violated)})" if self.violated else ""
+        lines.append(f"status: {self.status}{violated}   steps: {self.steps}   time: {self.seconds * 1e3:.3g} ms")
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.table()
+
+
+class DesignSweep(eqx.Module):
+    """A batch of solved designs (numpy arrays with a leading (batch,) axis, SI).
+
+    Attributes:
+        status: (batch,) status names, as in :class:`DesignResult`.
+        parameters: {variable: (batch,)}.
+        targets: {output: {"target": (batch,), "achieved": (batch,)}}.
+        limits: {output: {"achieved": (batch,), "active": (batch,) bool}}.
+        derivatives: {key: {variable: (batch,)}} for every target and limit row (0 where
+            a limit is inactive).
+        steps: (batch,); seconds: wall time of the whole batch.
+    """
+
+    status: np.ndarray
+    parameters: dict
+    targets: dict
+    limits: dict
+    derivatives: dict
+    steps: np.ndarray
+    seconds: float
+
+    @classmethod
+    def from_core(cls, problem, solution, thetas, seconds):
+        thetas = np.asarray(thetas)
+        names = [v.name for v in problem.variables]
+        n_targets = len(problem.targets)
+        limits = {}
+        for k, (i, _) in enumerate(problem.limit_rows):
+            output = problem.limits[i].output
+            entry = limits.setdefault(
+                output,
+                {"achieved": solution.outputs[:, problem.outputs.index(output)], "active": np.zeros(thetas.shape[0], bool)},
+            )
+            entry["active"] = entry["active"] | np.asarray(solution.active_limits[:, k])
+        return cls(
+            status=np.asarray(STATUS_NAMES)[np.asarray(solution.status)],
+            parameters={name: np.asarray(solution.x[:, j]) for j, name in enumerate(names)},
+            targets={
+                t.output: {"target": thetas[:, k], "achieved": solution.outputs[:, problem.outputs.index(t.output)]}
+                for k, t in enumerate(problem.targets)
+            },
+            limits=limits,
+            derivatives={
+                key: {name: np.asarray(solution.derivatives[:, j, column]) for j, name in enumerate(names)}
+                for column, key in enumerate(_keys(problem))
+            },
+            steps=np.asarray(solution.steps),
+            seconds=float(seconds),
+        )
+
+    @property
+    def successful(self) -> np.ndarray:
+        """(batch,) bool: which designs solved."""
+        return self.status == "successful"

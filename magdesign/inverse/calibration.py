@@ -1,0 +1,99 @@
+"""Calibration: fit a scene's uncertain constants to (load, reading) pairs.
+
+The constants (named by their dotted spec keys, see
+:func:`magdesign.scene.parameters`) are fitted as factors on their start values,
+p = p_start * y, by least squares on
+
+    (simulate(with_parameters(scene, p), loads).readings - readings) / noise
+
+(noise-free chain: the scene's noise effect is left out). The uncertainty of each
+fitted constant is the square root of the diagonal of noise^2 (J^T J)^-1 at the
+solution; with ``noise=None`` the noise is estimated from the residuals,
+sqrt(RSS / (m - p)) for m readings and p constants.
+"""
+
+from collections.abc import Sequence
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+from jaxtyping import Array, ArrayLike, Float, Int
+
+from magdesign._numerics import FD_CALIBRATION_STEP, LSQ_ATOL, LSQ_RTOL, safe_div, safe_sqrt
+from magdesign.inverse._jacobian import difference_jacobian
+from magdesign.scene.core import AbstractScene, chain, parameters, with_parameters
+from magdesign.scene.loads import Loads
+from magdesign.units import SpecError
+
+
+class Calibration(eqx.Module):
+    """A calibration's result.
+
+    Attributes:
+        values: fitted constants by name (SI).
+        uncertainty: their standard deviations by name (SI).
+        residuals: (n, S, C) readings minus the fitted model.
+        result: the optimistix result (``optx.RESULTS``).
+        steps: solver steps taken.
+    """
+
+    values: dict[str, Float[Array, ""]]
+    uncertainty: dict[str, Float[Array, ""]]
+    residuals: Float[Array, "n s c"]
+    result: optx.RESULTS
+    steps: Int[Array, ""]
+
+
+def calibrate(
+    scene: AbstractScene,
+    names: Sequence[str],
+    loads: Loads,
+    readings: Float[ArrayLike, "n s c"],
+    *,
+    noise: Float[ArrayLike, ""] | None = None,
+    max_steps: int = 100,
+) -> Calibration:
+    """Fit the constants ``names`` of ``scene`` (from their current values) to
+    ``readings`` (n, S, C) measured at ``loads`` (n points); Levenberg-Marquardt,
+    ``throw=False``. The returned values are SI; see the module docstring.
+    """
+    names = tuple(names)
+    values = parameters(scene)
+    for name in names:
+        if name not in values:
+            raise SpecError(f"{name}: unknown parameter; expected one of: {', '.join(values)}")
+    noise = None if noise is None else jnp.asarray(noise, dtype=float)
+    return _calibrate(scene, names, loads, jnp.asarray(readings, dtype=float), noise, max_steps)
+
+
+@eqx.filter_jit
+def _calibrate(scene, names, loads, readings, noise, max_steps):
+    start = {name: get(scene) for name, get in scene.parameter_paths.items() if name in names}
+    scale = noise if noise is not None else 1.0
+
+    def model(y):
+        fitted = with_parameters(scene, {name: start[name] * y[i] for i, name in enumerate(names)})
+        return chain(fitted, fitted.displacement(loads), time=loads.time, without=("noise",))[2]
+
+    flat_model = difference_jacobian(lambda y: model(y).ravel(), FD_CALIBRATION_STEP)
+
+    def residual(y, _):
+        return (flat_model(y) - readings.ravel()) / scale
+
+    solver = optx.LevenbergMarquardt(rtol=LSQ_RTOL, atol=LSQ_ATOL)
+    solution = optx.least_squares(residual, solver, jnp.ones(len(names)), max_steps=max_steps, throw=False)
+    r = residual(solution.value, None)
+    jacobian = jax.jacfwd(residual)(solution.value, None)
+    if noise is None:
+        scale = safe_sqrt(jnp.sum(r**2) / max(r.size - len(names), 1))
+    _, singular, vt = jnp.linalg.svd(jacobian, full_matrices=False)
+    variance = jnp.einsum("ki,k,ki->i", vt, safe_div(1.0, singular**2), vt)
+    sigma = scale * safe_sqrt(variance)
+    return Calibration(
+        values={name: start[name] * solution.value[i] for i, name in enumerate(names)},
+        uncertainty={name: jnp.abs(start[name]) * sigma[i] for i, name in enumerate(names)},
+        residuals=readings - model(solution.value),
+        result=solution.result,
+        steps=solution.stats["num_steps"],
+    )

@@ -1,0 +1,315 @@
+"""Scenes from parsed TOML specs (units as strings; see the files in examples/).
+
+Tables: [scene] (effects and their options), [magnet], [mechanics], [sensor],
+[geometry], [load], [inductors] (seed 003), [pole] (seed 000). [design] is ignored.
+The [magnet] table's ``shape`` picks the scene type: "cylinder" (seeds 001-003,
+:class:`MagnetScene`), "film" (seed 004, :class:`FilmScene`), "plate" (seed 000,
+:class:`PoleScene`).
+"""
+
+import dataclasses
+
+import jax.numpy as jnp
+import numpy as np
+
+from magdesign.fields.cylinder import FIDELITIES as CYLINDER_FIDELITIES
+from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, time_constant_from_pole
+from magdesign.mechanics.viscoelastic import SEED001_POLE, SEED001_SAMPLE_RATE
+from magdesign.scene import effects as fx
+from magdesign.scene._spec import Table, check_tables
+from magdesign.scene.film_scene import FilmScene
+from magdesign.scene.loads import loads_from_spec
+from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadout
+from magdesign.scene.mechanics import Dome, Layer
+from magdesign.scene.pole_scene import PoleScene
+from magdesign.transducers import SpinValve, ak8963, inesc_spin_valve, mlx90393, panasonic_meander
+from magdesign.units import SpecError, parse, uT
+
+TABLES = ("scene", "magnet", "mechanics", "sensor", "geometry", "load", "inductors", "pole")
+HALL_PRESETS = {"AK8963": ak8963, "MLX90393": mlx90393}
+VALVE_PRESETS = {"INESC": inesc_spin_valve, "PANASONIC": panasonic_meander}
+# NVE AA003-02 (seed 003), from NVE's AA-series catalogue: a 5 kOhm bridge, sensitivity
+# 2.0-3.2 mV/V/Oe (mid value 2.6 mV/V per 0.1 mT: 26 /T of output per supply volt),
+# linear to 14 Oe (1.4 mT), saturating at 20 Oe (2 mT); 5 V supply (1 mA through 5 kOhm).
+NVE_AA003_SENSITIVITY = 26.0
+NVE_AA003_LINEAR = 1.4e-3
+NVE_AA003_SATURATION = 2.0e-3
+# Seed 002's read-out ADC: 24-bit over 2.048 V full scale, 20-25 uV peak-to-peak noise,
+# i.e. a standard deviation of about 22.5 uV / 6.6 (peak-to-peak of a Gaussian ~ 6.6 sigma).
+ADC_FULL_SCALE = 2.048
+ADC_BITS = 24
+ADC_NOISE = 22.5e-6 / 6.6
+EARTH_FIELD = 50.0 * uT
+NDFEB_DRIFT = -0.12e-2  # 1/K
+
+
+def _material(table):
+    name = table.choice("material", ("mooney_rivlin", "neo_hookean", "linear"))
+    if name == "mooney_rivlin":
+        return MooneyRivlin(c10=jnp.asarray(table.quantity("c10", "Pa")), c01=jnp.asarray(table.quantity("c01", "Pa")))
+    if name == "neo_hookean":
+        return NeoHookean(mu=jnp.asarray(table.quantity("shear_modulus", "Pa")), bulk=jnp.asarray(table.quantity("bulk_modulus", "Pa")))
+    return LinearElastic(E=jnp.asarray(table.quantity("youngs_modulus", "Pa")), nu=jnp.asarray(table.quantity("poisson_ratio", "1")))
+
+
+def _mechanics(spec, fidelity, models=("dome", "layer")):
+    table = Table(spec, "mechanics")
+    model = table.choice("model", models)
+    if model == "dome":
+        levels = ("reissner", "axisymmetric")
+        mechanics = Dome(
+            outer_radius=jnp.asarray(table.quantity("outer_radius", "m")),
+            thickness=jnp.asarray(table.quantity("thickness", "m")),
+            material=_material(table),
+            fidelity=table.choice("fidelity", levels, default="reissner"),
+            base=table.choice("base", ("bonded", "sliding"), default="bonded"),
+        )
+    else:
+        levels = ("hooke", "bonded")
+        mechanics = Layer(
+            thickness=jnp.asarray(table.quantity("thickness", "m")),
+            contact_area=jnp.asarray(table.quantity("contact_area", "m^2")),
+            material=_material(table),
+            fidelity=table.choice("fidelity", levels, default="hooke"),
+        )
+    table.done()
+    if fidelity is not None:
+        if fidelity not in levels:
+            raise SpecError(f"fidelity: expected one of {', '.join(map(repr, levels))} for a {model}, got {fidelity!r}")
+        mechanics = dataclasses.replace(mechanics, fidelity=fidelity)
+    return mechanics
+
+
+def _sensor_layout(table):
+    """Positions (S, 3) (m) and nominal chip angles (S, 3) (rad) from [sensor]."""
+    if table.has("grid"):
+        rows, cols = _grid(table)
+        pitch = table.quantity("pitch", "m")
+        x, y = np.meshgrid((np.arange(cols) - (cols - 1) / 2) * pitch, (np.arange(rows) - (rows - 1) / 2) * pitch)
+        depth = table.quantity("depth", "m", default=0.0)
+        positions = np.stack([x.ravel(), y.ravel(), np.full(x.size, -depth)], axis=-1)
+    elif table.has("positions"):
+        raw = table._get("positions", None)
+        if not isinstance(raw, list) or not all(isinstance(row, list) and len(row) == 3 for row in raw):
+            raise SpecError(f"sensor.positions: expected a list of [x, y, z] quantities in m, got {raw!r}")
+        positions = np.array([[parse(value, "m", key="sensor.positions") for value in row] for row in raw])
+    else:
+        positions = np.zeros((1, 3))
+    orientation = table.choice("orientation", ("aligned", "radial"), default="aligned")
+    angles = np.zeros_like(positions)
+    if orientation == "radial":
+        # sensitive axis a along the outward radius: Rz(gamma) maps (cos phi, sin phi) to a
+        angles[:, 2] = -np.arctan2(positions[:, 1], positions[:, 0])
+    return jnp.asarray(positions), jnp.asarray(angles)
+
+
+def _grid(table):
+    value = table._get("grid", [1, 1])
+    if not (isinstance(value, list) and len(value) == 2 and all(isinstance(v, int) and v > 0 for v in value)):
+        raise SpecError(f"sensor.grid: expected [rows, columns] (positive integers), got {value!r}")
+    return tuple(value)
+
+
+# Reading-stage option keys of [scene], read only for listed effects.
+_EFFECT_KEYS = ("temperature_coefficient", "temperature_change", "placement", "tilt", "lag_time_constant",
+                "area", "quadrature", "background", "saturation_limit", "noise", "lsb")
+
+
+def _effects(spec, reading_unit, *, saturation, lsb, noise):
+    """The [scene] table's effects with their options (defaults from the transducer)."""
+    table = Table(spec, "scene", required=False)
+    names = table.strings("effects", default=[])
+    for name in names:
+        if name not in fx.EFFECT_NAMES:
+            raise SpecError(f"scene.effects: unknown effect {name!r}; expected any of: {', '.join(fx.EFFECT_NAMES)}")
+
+    def scalar(key, unit, default):
+        return jnp.asarray(table.quantity(key, unit, default=default))
+
+    def vector(key, unit, default):
+        return jnp.asarray(table.quantities(key, unit, length=len(default), default=default))
+
+    build = {
+        "temperature_drift": lambda: fx.TemperatureDrift(
+            coefficient=scalar("temperature_coefficient", "1/K", NDFEB_DRIFT),
+            temperature_change=scalar("temperature_change", "K", 10.0),
+        ),
+        "placement": lambda: fx.Placement(offsets=vector("placement", "m", [200e-6, 0.0, 0.0])),
+        "chip_tilt": lambda: fx.ChipTilt(angles=vector("tilt", "rad", [10.0 * np.pi / 180, 0.0, 0.0])),
+        "viscoelastic_lag": lambda: fx.ViscoelasticLag(
+            time_constant=scalar("lag_time_constant", "s", float(time_constant_from_pole(SEED001_POLE, SEED001_SAMPLE_RATE)))
+        ),
+        "area_averaging": lambda: fx.AreaAveraging(
+            size=vector("area", "m", [200e-6, 95e-6]), points=table.integer("quadrature", default=3)
+        ),
+        "background": lambda: fx.Background(field_=vector("background", "T", [0.0, 0.0, EARTH_FIELD])),
+        "saturation": lambda: fx.Saturation(limit=scalar("saturation_limit", reading_unit, saturation)),
+        "noise": lambda: fx.Noise(sigma=scalar("noise", reading_unit, noise)),
+        "quantisation": lambda: fx.Quantisation(lsb=scalar("lsb", reading_unit, lsb)),
+    }
+    chosen = fx.in_order([build[name]() for name in names])
+    table._known.extend(_EFFECT_KEYS)
+    table.done()
+    return chosen
+
+
+def _max_loads(spec):
+    loads = loads_from_spec(spec)
+    return jnp.max(loads.normal), jnp.max(jnp.abs(loads.shear))
+
+
+def _hall(table):
+    preset = table.choice("preset", tuple(HALL_PRESETS))
+    return HALL_PRESETS[preset]()
+
+
+def _hall_effects(spec, hall):
+    # per-axis range and LSB: the scene's effects use the largest (x, y, z may differ)
+    return _effects(spec, "T", saturation=float(jnp.min(hall.full_scale)), lsb=float(jnp.max(hall.lsb)),
+                    noise=float(jnp.max(hall.lsb)))
+
+
+def _cylinder_scene(spec, fidelity):
+    magnet = Table(spec, "magnet")
+    magnet.choice("shape", ("cylinder",))
+    radius, height = magnet.quantity("radius", "m"), magnet.quantity("height", "m")
+    remanence = magnet.quantity("remanence", "T")
+    field_fidelity = magnet.choice("fidelity", CYLINDER_FIDELITIES, default="exact")
+    magnet.done()
+    mechanics = _mechanics(spec, fidelity)
+    sensor = Table(spec, "sensor")
+    model = sensor.choice("model", ("hall3d", "spin_valve", "gmr"))
+    if model == "hall3d":
+        transducer = _hall(sensor)
+        positions, angles = _sensor_layout(sensor)
+        sensor.done()
+        effects = _hall_effects(spec, transducer)
+    else:
+        if model == "spin_valve":
+            preset = sensor.choice("preset", tuple(VALVE_PRESETS))
+            valve = VALVE_PRESETS[preset]()
+        else:
+            sensor.choice("preset", ("AA003-02",))
+            valve = SpinValve(resistance=5e3, sensitivity=NVE_AA003_SENSITIVITY, bias_current=1e-3,
+                              linear_range=NVE_AA003_LINEAR, saturation_field=NVE_AA003_SATURATION)
+        amplification = sensor.quantity("amplification", "1", default=1.0)
+        differential = model == "gmr"
+        transducer = SpinValveReadout(valve, jnp.asarray(amplification), differential)
+        positions, angles = _sensor_layout(sensor)
+        sensor.done()
+        effects = _effects(spec, "V", saturation=ADC_FULL_SCALE, lsb=ADC_FULL_SCALE / 2 ** (ADC_BITS - 1), noise=ADC_NOISE)
+    if field_fidelity == "axis" and np.any(np.asarray(positions)[:, :2] != 0.0):
+        raise SpecError("magnet.fidelity: 'axis' needs every sensor on the magnet's axis (x = y = 0)")
+    geometry = Table(spec, "geometry")
+    gap = geometry.quantity("gap", "m")
+    geometry.done()
+    inductors = None
+    if "inductors" in spec:
+        table = Table(spec, "inductors")
+        raw = table._get("positions", None)
+        if not isinstance(raw, list) or not all(isinstance(row, list) and len(row) == 3 for row in raw):
+            raise SpecError(f"inductors.positions: expected a list of [x, y, z] quantities in m, got {raw!r}")
+        inductors = Inductors(
+            positions=jnp.asarray([[parse(v, "m", key="inductors.positions") for v in row] for row in raw]),
+            area=jnp.asarray(table.quantity("area", "m^2")),
+            turns=jnp.asarray(table.quantity("turns", "1")),
+            amplification=jnp.asarray(table.quantity("amplification", "1", default=1.0)),
+            window=table.integer("window", default=20, minimum=2),
+        )
+        table.done()
+    return MagnetScene(
+        radius=jnp.asarray(radius),
+        height=jnp.asarray(height),
+        remanence=jnp.asarray(remanence),
+        gap=jnp.asarray(gap),
+        mechanics=mechanics,
+        sensor_positions=positions,
+        sensor_angles=angles,
+        transducer=transducer,
+        max_force=_max_loads(spec)[0],
+        effects=effects,
+        inductors=inductors,
+        fidelity=field_fidelity,
+    )
+
+
+def _film_scene(spec, fidelity):
+    magnet = Table(spec, "magnet")
+    magnet.choice("shape", ("film",))
+    period, thickness = magnet.quantity("period", "m"), magnet.quantity("thickness", "m")
+    magnetization = magnet.quantity("magnetization", "T")
+    magnet.done()
+    layer = _mechanics(spec, fidelity, models=("layer",))
+    sensor = Table(spec, "sensor")
+    sensor.choice("model", ("hall3d",))
+    hall = _hall(sensor)
+    grid = _grid(sensor)
+    pitch = sensor.quantity("pitch", "m", default=0.0)
+    sensor.done()
+    return FilmScene(
+        period=jnp.asarray(period),
+        film_thickness=jnp.asarray(thickness),
+        magnetization=jnp.asarray(magnetization),
+        layer=layer,
+        pitch=jnp.asarray(pitch),
+        max_shear=_max_loads(spec)[1],
+        hall=hall,
+        effects=_hall_effects(spec, hall),
+        grid=grid,
+    )
+
+
+def _pole_scene(spec, fidelity):
+    if fidelity is not None:
+        raise SpecError(f"fidelity: the pole scene has one (reduced) mechanics model, got {fidelity!r}")
+    magnet = Table(spec, "magnet")
+    magnet.choice("shape", ("plate",))
+    radius, height = magnet.quantity("radius", "m"), magnet.quantity("height", "m")
+    remanence = magnet.quantity("remanence", "T")
+    magnet.done()
+    pole = Table(spec, "pole")
+    ball_radius = pole.quantity("ball_radius", "m")
+    diameter = pole.quantity("diameter", "m")
+    demag = pole.quantity("demagnetizing_factor", "1")
+    pole.done()
+    mechanics = Table(spec, "mechanics")
+    mechanics.choice("model", ("tilt",))
+    spring = mechanics.quantity("spring", "N/rad")
+    mechanics.done()
+    geometry = Table(spec, "geometry")
+    gap = geometry.quantity("gap", "m")
+    geometry.done()
+    sensor = Table(spec, "sensor")
+    sensor.choice("model", ("gmr",))
+    sensor.choice("preset", ("PANASONIC",))
+    offset = sensor.quantity("offset", "m")
+    sensor_height = sensor.quantity("height", "m")
+    sensor.done()
+    return PoleScene(
+        plate_radius=jnp.asarray(radius),
+        plate_thickness=jnp.asarray(height),
+        remanence=jnp.asarray(remanence),
+        gap=jnp.asarray(gap),
+        ball_radius=jnp.asarray(ball_radius),
+        pole_diameter=jnp.asarray(diameter),
+        demagnetizing_factor=jnp.asarray(demag),
+        spring=jnp.asarray(spring),
+        sensor_offset=jnp.asarray(offset),
+        sensor_height=jnp.asarray(sensor_height),
+        transducer=SpinValveReadout(panasonic_meander(), jnp.asarray(1.0), True),
+        effects=_effects(spec, "V", saturation=ADC_FULL_SCALE, lsb=ADC_FULL_SCALE / 2 ** (ADC_BITS - 1), noise=ADC_NOISE),
+    )
+
+
+_SCENES = {"cylinder": _cylinder_scene, "film": _film_scene, "plate": _pole_scene}
+
+
+def scene_from_spec(spec: dict, *, fidelity: str | None = None):
+    """Build a scene from a parsed TOML spec (all tables but [design], which is ignored).
+
+    ``fidelity``, when given, overrides the spec's mechanics fidelity. Raises
+    :class:`~magdesign.units.SpecError` (one line, naming the key) on bad input.
+    """
+    check_tables(spec, TABLES)
+    shape = Table(spec, "magnet").choice("shape", tuple(_SCENES))
+    return _SCENES[shape](spec, fidelity)

@@ -1,0 +1,243 @@
+"""The scene: one sensor design's forward chain, and :func:`simulate`.
+
+    loads --mechanics--> displacement of the source relative to the sensors (n, 3)
+          --source-----> flux density at each sensor, scene frame (n, S, 3)
+          --chip frame-> the field each chip sees, Rx Ry Rz H (n, S, 3)
+          --transducer-> readings (n, S, C)
+
+with the scene's effects (:mod:`magdesign.scene.effects`) hooked in at their stages.
+"""
+
+import abc
+from collections.abc import Callable, Mapping
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float, PRNGKeyArray
+
+from magdesign.scene.effects import AbstractEffect, AreaAveraging
+from magdesign.scene.loads import Loads
+from magdesign.scene.pose import to_chip
+from magdesign.units import SpecError
+
+
+class AbstractScene(eqx.Module):
+    """A sensor design: a magnetic source, its mechanics, sensors, and effects.
+
+    Concrete scenes hold their numeric parameters as float64 array leaves (see
+    :func:`parameters`) and their configuration (fidelity, sensor count, effect list)
+    as static structure. Subclasses give:
+
+    - ``parameter_paths``: dotted spec key -> accessor of the leaf in the scene;
+    - ``SOURCE_KEY``: the parameter that the temperature drift scales;
+    - ``reading_labels`` / ``reading_unit``: names of the C reading channels and their unit;
+    - ``output_units``: each name :meth:`outputs` returns -> its SI unit, as a string
+      :func:`magdesign.units.parse` reads ("m/N", "T", "1", ...).
+    """
+
+    effects: eqx.AbstractVar[tuple[AbstractEffect, ...]]
+    SOURCE_KEY: ClassVar[str]
+    reading_labels: ClassVar[tuple[str, ...]]
+    reading_unit: ClassVar[str]
+    output_units: ClassVar[dict[str, str]]
+
+    @property
+    @abc.abstractmethod
+    def parameter_paths(self) -> dict[str, Callable]:
+        """Dotted spec key -> accessor of that parameter's leaf in the scene."""
+
+    @abc.abstractmethod
+    def sensor_poses(self) -> tuple[Float[Array, "s 3"], Float[Array, "s 3 3"]]:
+        """Nominal sensor positions (S, 3) (m) and chip rotations (S, 3, 3), scene frame."""
+
+    @abc.abstractmethod
+    def displacement(self, loads: Loads) -> Float[Array, "n 3"]:
+        """Displacement (m) of the source relative to the sensors at each load point."""
+
+    @abc.abstractmethod
+    def source_field(self, points: Float[Array, "... 3"], displacement: Float[Array, "3"]) -> Float[Array, "... 3"]:
+        """Flux density (T) of the displaced source at ``points`` (m), scene frame."""
+
+    @abc.abstractmethod
+    def transduce(self, field: Float[Array, "n s 3"]) -> Float[Array, "n s c"]:
+        """Ideal readings (``reading_unit``) from the field in each chip's frame (T)."""
+
+    @abc.abstractmethod
+    def outputs(self) -> dict[str, Float[Array, ""]]:
+        """Named scalar outputs (SI) for design targets; see each scene."""
+
+    def probe_points(self) -> Float[Array, "e 3"] | None:
+        """Points (E, 3) (m) besides the sensors whose field :meth:`extras` needs (e.g.
+        inductors), evaluated in the same batched field call as the sensors'; or None."""
+        return None
+
+    def extras(
+        self, displacement: Float[Array, "n 3"], loads: Loads, probe_field: Float[Array, "n e 3"] | None
+    ) -> dict[str, Array]:
+        """Further read-outs of a simulation (e.g. inductor EMF, slip flags), given the
+        field (T, scene frame, no field effects) at :meth:`probe_points`."""
+        return {}
+
+
+class SimulationResult(eqx.Module):
+    """The forward chain over a load sweep.
+
+    Attributes:
+        loads: the load sweep (n points).
+        displacement: (n, 3) source displacement relative to the sensors (m).
+        field: (n, S, 3) flux density at each sensor in the scene frame, with the
+            field effects applied (T).
+        readings: (n, S, C) transducer readings with all effects (reading unit).
+        extras: further named arrays (scene-specific).
+        labels: names of the C reading channels; unit: their unit (static).
+    """
+
+    loads: Loads
+    displacement: Float[Array, "n 3"]
+    field: Float[Array, "n s 3"]
+    readings: Float[Array, "n s c"]
+    extras: dict[str, Array]
+    labels: tuple[str, ...] = eqx.field(static=True)
+    unit: str = eqx.field(static=True)
+
+
+def parameters(scene: AbstractScene) -> dict[str, Float[Array, ""]]:
+    """The scene's numeric parameters by dotted spec key (SI float64 arrays)."""
+    return {name: get(scene) for name, get in scene.parameter_paths.items()}
+
+
+def with_parameters(scene: AbstractScene, values: Mapping[str, ArrayLike]) -> AbstractScene:
+    """A copy of ``scene`` with the named parameters replaced (traceable: jit/grad/vmap).
+
+    Raises:
+        SpecError: a name that is not one of the scene's parameters.
+    """
+    paths = scene.parameter_paths
+    for name in values:
+        if name not in paths:
+            raise SpecError(f"{name}: unknown parameter; expected one of: {', '.join(paths)}")
+    if not values:
+        return scene
+    names = list(values)
+    getters = [paths[name] for name in names]
+    replacements = [jnp.asarray(values[name], dtype=jnp.result_type(float)) for name in names]
+    return eqx.tree_at(lambda s: [get(s) for get in getters], scene, replacements)
+
+
+def outputs(scene: AbstractScene) -> dict[str, Float[Array, ""]]:
+    """The scene's named scalar outputs (SI); traceable and differentiable."""
+    return scene.outputs()
+
+
+def _apply_source_effects(scene, effects):
+    for effect in effects:
+        scale = effect.source_scale()
+        if scale is not None:
+            strength = scene.parameter_paths[scene.SOURCE_KEY](scene)
+            scene = with_parameters(scene, {scene.SOURCE_KEY: strength * scale})
+    return scene
+
+
+def chain(
+    scene: AbstractScene,
+    displacement: Float[Array, "n 3"],
+    *,
+    time: Float[Array, " n"] | None = None,
+    key: PRNGKeyArray | None = None,
+    without: tuple[str, ...] = (),
+) -> tuple[Float[Array, "n 3"], Float[Array, "n s 3"], Float[Array, "n s c"], Float[Array, "n e 3"] | None]:
+    """The chain from the source's displacement (n, 3) (m) on: (displacement after the
+    motion effects, field (n, S, 3) (T, scene frame), readings (n, S, C), field at the
+    scene's probe points (n, E, 3) (T) or None).
+
+    Effects named in ``without`` are left out (the inverse leaves out "noise" and
+    "viscoelastic_lag" to get the deterministic, static forward model).
+    """
+    effects = tuple(effect for effect in scene.effects if effect.name not in without)
+    scene = _apply_source_effects(scene, effects)
+    positions, rotations = scene.sensor_poses()
+    for effect in effects:
+        positions, rotations = effect.sensors(positions, rotations)
+    positions = jnp.broadcast_to(positions, rotations.shape[:-1])
+    for effect in effects:
+        displacement = effect.motion(displacement, time)
+
+    probes = scene.probe_points()
+    sensors = positions.shape[0]
+    averaging = [effect for effect in effects if isinstance(effect, AreaAveraging)]
+    if averaging:
+        offsets, weights = averaging[0].nodes(rotations)
+        nodes = positions[:, None, :] + offsets
+        if probes is not None:
+            nodes = jnp.concatenate([nodes, jnp.broadcast_to(probes[:, None, :], probes.shape[:1] + nodes.shape[1:])])
+        field = jax.vmap(lambda u: jnp.einsum("q,sqi->si", weights, scene.source_field(nodes, u)))(displacement)
+    else:
+        points = positions if probes is None else jnp.concatenate([positions, probes])
+        field = jax.vmap(lambda u: scene.source_field(points, u))(displacement)
+    field, probe_field = field[:, :sensors], (None if probes is None else field[:, sensors:])
+    for effect in effects:
+        field = effect.field(field)
+
+    readings = scene.transduce(to_chip(rotations, field))
+    for effect in effects:
+        readings = effect.reading(readings, key)
+    return displacement, field, readings, probe_field
+
+
+@eqx.filter_jit
+def simulate(scene: AbstractScene, loads: Loads, *, key: PRNGKeyArray | None = None) -> SimulationResult:
+    """Run the scene's forward chain over ``loads``, with exactly the scene's effects (jitted).
+
+    ``key`` (a JAX PRNG key) is needed only when the scene lists ``noise``.
+    """
+    displacement, field, readings, probe_field = chain(scene, scene.displacement(loads), time=loads.time, key=key)
+    extras = scene.extras(displacement, loads, probe_field)
+    return SimulationResult(loads, displacement, field, readings, extras, scene.reading_labels, scene.reading_unit)
+
+
+def _si_to_display(unit):
+    """A display unit and its factor for an SI unit name."""
+    return {"T": ("mT", 1e3), "V": ("mV", 1e3), "m": ("mm", 1e3), "N": ("N", 1.0)}.get(unit, (unit, 1.0))
+
+
+def simulation_table(result: SimulationResult) -> str:
+    """A readable table: one row per load point, forces (N), displacement (mm), readings."""
+    unit, factor = _si_to_display(result.unit)
+    readings = np.asarray(result.readings) * factor
+    n, sensors, channels = readings.shape
+    header = ["t (s)", "Fz (N)", "Fx (N)", "Fy (N)", "ux (mm)", "uy (mm)", "uz (mm)"]
+    names = [f"s{s}.{label}" for s in range(sensors) for label in result.labels]
+    header += [f"{name} ({unit})" for name in names]
+    rows = []
+    loads = result.loads
+    u = np.asarray(result.displacement) * 1e3
+    for i in range(n):
+        row = [loads.time[i], loads.normal[i], loads.shear[i, 0], loads.shear[i, 1], *u[i], *readings[i].ravel()]
+        rows.append([f"{float(value):.6g}" for value in row])
+    widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(header)]
+    lines = ["  ".join(h.rjust(w) for h, w in zip(header, widths))]
+    lines += ["  ".join(v.rjust(w) for v, w in zip(row, widths)) for row in rows]
+    for name, value in result.extras.items():
+        lines.append(f"{name}: {np.array2string(np.asarray(value), precision=6)}")
+    return "\n".join(lines)
+
+
+def simulation_json(result: SimulationResult) -> dict:
+    """The result as plain JSON data (SI floats, nested lists)."""
+    loads = result.loads
+    return {
+        "units": {"time": "s", "normal": "N", "shear": "N", "contact": "m", "displacement": "m", "field": "T",
+                  "readings": result.unit},
+        "labels": list(result.labels),
+        "time": np.asarray(loads.time).tolist(),
+        "normal": np.asarray(loads.normal).tolist(),
+        "shear": np.asarray(loads.shear).tolist(),
+        "contact": np.asarray(loads.contact).tolist(),
+        "displacement": np.asarray(result.displacement).tolist(),
+        "field": np.asarray(result.field).tolist(),
+        "readings": np.asarray(result.readings).tolist(),
+        "extras": {name: np.asarray(value).tolist() for name, value in result.extras.items()},
+    }

@@ -1,0 +1,108 @@
+"""Seed 004: a sinusoidally magnetised film on an elastomer layer over Hall taxels.
+
+The film (period T, thickness d, field scale M0; :mod:`magdesign.fields.film`) lies on
+an elastomer layer of thickness h; the taxels sit on the layer's bottom face (z = 0)
+on a square grid. A load moves the whole film: normal force Fz by -Fz / k_n along z
+(towards the taxels), shear (Fx, Fy) by F / k_s, with the layer stiffness k_n, k_s of
+:func:`magdesign.mechanics.layer_stiffness` for the contact area S. The film is
+uniform along y, so only the x shear changes the field.
+
+Outputs (:meth:`FilmScene.outputs`):
+    field_fraction      |B| at the taxels over |B| at the film's face, e^{-k h} (-)
+    normal_sensitivity  d|B| / dFz at the taxels at rest (T/N)
+    shear_phase_max     k times the largest shear displacement of the sweep (rad)
+    normal_compliance   1 / k_n (m/N);  shear_compliance  1 / k_s (m/N)
+"""
+
+from typing import ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from magdesign.fields import film, film_magnitude
+from magdesign.scene.core import AbstractScene
+from magdesign.scene.effects import AbstractEffect
+from magdesign.scene.mechanics import Layer
+from magdesign.transducers import Hall3D
+
+
+def grid_positions(shape: tuple[int, int], pitch) -> Float[Array, "s 3"]:
+    """Centres (S, 3) (m) of a rows x cols grid at ``pitch`` (m) in z = 0, centred on the origin."""
+    rows, cols = shape
+    x = (jnp.arange(cols) - (cols - 1) / 2) * pitch
+    y = (jnp.arange(rows) - (rows - 1) / 2) * pitch
+    xx, yy = jnp.meshgrid(x, y)
+    return jnp.stack([xx.ravel(), yy.ravel(), jnp.zeros(xx.size)], axis=-1)
+
+
+class FilmScene(AbstractScene):
+    """Seed 004 (see the module docstring); all lengths (m), M0 (T), area (m^2)."""
+
+    period: Float[Array, ""]
+    film_thickness: Float[Array, ""]
+    magnetization: Float[Array, ""]
+    layer: Layer
+    pitch: Float[Array, ""]
+    max_shear: Float[Array, ""]
+    hall: Hall3D
+    effects: tuple[AbstractEffect, ...]
+    grid: tuple[int, int] = eqx.field(static=True)
+
+    SOURCE_KEY: ClassVar = "magnet.magnetization"
+    reading_labels: ClassVar = ("Bx", "By", "Bz")
+    reading_unit: ClassVar = "T"
+    output_units: ClassVar[dict[str, str]] = {
+        "field_fraction": "1",
+        "normal_sensitivity": "T/N",
+        "shear_phase_max": "rad",
+        "normal_compliance": "m/N",
+        "shear_compliance": "m/N",
+    }
+
+    @property
+    def parameter_paths(self):
+        paths = {
+            "magnet.period": lambda s: s.period,
+            "magnet.thickness": lambda s: s.film_thickness,
+            "magnet.magnetization": lambda s: s.magnetization,
+            "sensor.pitch": lambda s: s.pitch,
+        }
+        for name, get in self.layer.parameter_paths.items():
+            paths[name] = lambda s, get=get: get(s.layer)
+        return paths
+
+    def sensor_poses(self):
+        positions = grid_positions(self.grid, self.pitch)
+        return positions, jnp.broadcast_to(jnp.eye(3), (positions.shape[0], 3, 3))
+
+    def displacement(self, loads):
+        return self.layer.displacement(loads)
+
+    def source_field(self, points, displacement):
+        depth = self.layer.thickness + displacement[2] - points[..., 2]
+        bx, bz = film(
+            points[..., 0] - displacement[0],
+            depth,
+            period=self.period,
+            thickness=self.film_thickness,
+            magnetization=self.magnetization,
+        )
+        return jnp.stack([bx, jnp.zeros_like(bx), bz], axis=-1)
+
+    def transduce(self, field):
+        return field
+
+    def outputs(self):
+        k = 2.0 * jnp.pi / self.period
+        stiffness = self.layer.stiffness
+        at_taxels = film_magnitude(
+            self.layer.thickness, period=self.period, thickness=self.film_thickness, magnetization=self.magnetization
+        )
+        return {
+            "field_fraction": jnp.exp(-k * self.layer.thickness),
+            "normal_sensitivity": k * at_taxels / stiffness.normal,
+            "shear_phase_max": k * self.max_shear / stiffness.shear,
+            "normal_compliance": 1.0 / stiffness.normal,
+            "shear_compliance": 1.0 / stiffness.shear,
+        }

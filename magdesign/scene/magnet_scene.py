@@ -1,0 +1,169 @@
+"""Seeds 001, 002, 003: an axially magnetised cylinder moved by a dome or a layer.
+
+Scene frame: the reference sensor plane is z = 0; at rest the magnet's near (bottom)
+face is ``gap`` above it, its axis along z through the origin, magnetised along +z
+(:func:`magdesign.fields.cylinder`, exact fidelity unless the spec says otherwise).
+Sensors sit at given positions (a reference sensor at the origin for seed 001; a
+4 x 2 matrix for seed 002; four GMR at several depths for seed 003). A press moves
+the magnet by -z towards them (seed 002's chips move towards a fixed magnet: the
+same relative displacement).
+
+Outputs (:meth:`MagnetScene.outputs`), at the sweep's largest normal force F:
+    compliance         secant compliance at F (m/N)
+    closest_gap        gap - compliance F (m)
+    field_rest         Bz at sensor 0 at zero load (T)
+    field_closest      Bz at sensor 0 at F (T)
+    sensitivity        (field_closest - field_rest) / F (T/N)
+    inplane_field_max  largest |B_a| (the chip's sensitive in-plane axis) over the
+                       sensors and over OUTPUT_POINTS loads from 0 to F (T)
+    inplane_field_min  the smallest (most negative) B_a over the same (T)
+"""
+
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from magdesign.fields import cylinder
+from magdesign.scene.core import AbstractScene
+from magdesign.scene.effects import AbstractEffect
+from magdesign.scene.mechanics import AbstractMechanics
+from magdesign.scene.pose import rotation, to_chip
+from magdesign.transducers import emf, slip_flags, Hall3D, SpinValve
+
+# Load points from zero to the largest force over which the in-plane outputs are taken.
+OUTPUT_POINTS = 11
+
+
+class SpinValveReadout(eqx.Module):
+    """A spin valve's output voltage, optionally amplified as a bridge difference.
+
+    reading = amplification * (V(B) - V(0)) if ``differential`` else amplification * V(B),
+    V = I R0 (1 + s f(B_a)) (:class:`magdesign.transducers.SpinValve`).
+    """
+
+    valve: SpinValve
+    amplification: Float[Array, ""]
+    differential: bool = eqx.field(static=True)
+
+    def __call__(self, field):
+        voltage = self.valve.voltage(field)
+        if self.differential:
+            voltage = voltage - self.valve.bias_current * self.valve.resistance
+        return self.amplification * voltage
+
+
+class Inductors(eqx.Module):
+    """Seed 003's chip inductors: EMF = -N d(Bz A)/dt, amplified, and the slip flags.
+
+    ``positions`` (I, 3) (m), ``area`` the coil's mean turn area (m^2), ``turns`` N,
+    ``amplification`` (-); ``window`` samples of history for the 3-sigma slip test.
+    """
+
+    positions: Float[Array, "i 3"]
+    area: Float[Array, ""]
+    turns: Float[Array, ""]
+    amplification: Float[Array, ""]
+    window: int = eqx.field(static=True)
+
+
+class MagnetScene(AbstractScene):
+    """A cylinder magnet over sensors (see the module docstring); SI throughout."""
+
+    radius: Float[Array, ""]
+    height: Float[Array, ""]
+    remanence: Float[Array, ""]
+    gap: Float[Array, ""]
+    mechanics: AbstractMechanics
+    sensor_positions: Float[Array, "s 3"]
+    sensor_angles: Float[Array, "s 3"]
+    transducer: Hall3D | SpinValveReadout
+    max_force: Float[Array, ""]
+    effects: tuple[AbstractEffect, ...]
+    inductors: Inductors | None = None
+    fidelity: str = eqx.field(static=True, default="exact")
+
+    SOURCE_KEY = "magnet.remanence"
+    output_units: ClassVar[dict[str, str]] = {
+        "compliance": "m/N",
+        "closest_gap": "m",
+        "field_rest": "T",
+        "field_closest": "T",
+        "sensitivity": "T/N",
+        "inplane_field_max": "T",
+        "inplane_field_min": "T",
+    }
+
+    @property
+    def parameter_paths(self):
+        paths = {
+            "geometry.gap": lambda s: s.gap,
+            "magnet.radius": lambda s: s.radius,
+            "magnet.height": lambda s: s.height,
+            "magnet.remanence": lambda s: s.remanence,
+        }
+        for name, get in self.mechanics.parameter_paths.items():
+            paths[name] = lambda s, get=get: get(s.mechanics)
+        return paths
+
+    @property
+    def reading_labels(self):
+        return ("Bx", "By", "Bz") if isinstance(self.transducer, Hall3D) else ("V",)
+
+    @property
+    def reading_unit(self):
+        return "T" if isinstance(self.transducer, Hall3D) else "V"
+
+    def sensor_poses(self):
+        return self.sensor_positions, rotation(self.sensor_angles)
+
+    def displacement(self, loads):
+        return self.mechanics.displacement(loads)
+
+    def source_field(self, points, displacement):
+        centre = jnp.array([0.0, 0.0, 1.0]) * (self.gap + self.height / 2) + displacement
+        return cylinder(
+            points - centre,
+            radius=self.radius,
+            height=self.height,
+            polarization=self.remanence,
+            fidelity=self.fidelity,
+        )
+
+    def transduce(self, field):
+        if isinstance(self.transducer, Hall3D):
+            return field
+        return self.transducer(field)[..., None]
+
+    def outputs(self):
+        force = self.max_force
+        compliance = self.mechanics.compliance(force)
+        closest = jnp.array([0.0, 0.0, -1.0]) * compliance * force
+        # one field evaluation over the sweep from rest (first point) to closest (last)
+        sweep = jnp.linspace(0.0, 1.0, OUTPUT_POINTS)[:, None] * closest
+        field = jax.vmap(lambda u: self.source_field(self.sensor_positions, u))(sweep)
+        field_rest, field_closest = field[0, 0, 2], field[-1, 0, 2]
+        inplane = to_chip(rotation(self.sensor_angles), field)[..., 0]
+        return {
+            "compliance": compliance,
+            "closest_gap": self.gap - compliance * force,
+            "field_rest": field_rest,
+            "field_closest": field_closest,
+            "sensitivity": (field_closest - field_rest) / force,
+            "inplane_field_max": jnp.max(jnp.abs(inplane)),
+            "inplane_field_min": jnp.min(inplane),
+        }
+
+    def probe_points(self):
+        return None if self.inductors is None else self.inductors.positions
+
+    def extras(self, displacement, loads, probe_field):
+        if self.inductors is None:
+            return {}
+        coils = self.inductors
+        bz = probe_field[..., 2]
+        dt = loads.time[1] - loads.time[0]
+        output = coils.amplification * emf(bz * coils.area, dt=dt, turns=coils.turns)
+        return {"inductor_emf": output, "slip": slip_flags(output, window=coils.window)}

@@ -1,0 +1,104 @@
+"""How a scene's load moves its source: a dome or an elastomer layer.
+
+Each model maps a :class:`~magdesign.scene.Loads` sweep to the source's displacement
+(n, 3) (m) relative to the sensors; pressing (normal force > 0) moves it by -z.
+"""
+
+import abc
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from magdesign import mechanics
+from magdesign.mechanics import AbstractMaterial, LinearElastic, MooneyRivlin, NeoHookean
+from magdesign.scene.loads import Loads
+
+# Spec names (under [mechanics]) of each material's parameters, and their accessors.
+MATERIAL_PARAMETERS = {
+    MooneyRivlin: {"c10": lambda m: m.c10, "c01": lambda m: m.c01},
+    LinearElastic: {"youngs_modulus": lambda m: m.E, "poisson_ratio": lambda m: m.nu},
+    NeoHookean: {"shear_modulus": lambda m: m.mu, "bulk_modulus": lambda m: m.bulk},
+}
+
+
+class AbstractMechanics(eqx.Module):
+    """A load -> displacement model with named parameters (``PARAMETERS``)."""
+
+    material: eqx.AbstractVar[AbstractMaterial]
+    PARAMETERS: ClassVar[dict]
+
+    @property
+    def parameter_paths(self) -> dict:
+        """Dotted spec key -> accessor of the leaf in this model."""
+        paths = dict(self.PARAMETERS)
+        for name, get in MATERIAL_PARAMETERS[type(self.material)].items():
+            paths[f"mechanics.{name}"] = lambda m, get=get: get(m.material)
+        return paths
+
+    @abc.abstractmethod
+    def displacement(self, loads: Loads) -> Float[Array, "n 3"]:
+        """Displacement (m), (n, 3), at each load point."""
+
+    @abc.abstractmethod
+    def compliance(self, force: Float[Array, ""]) -> Float[Array, ""]:
+        """Secant normal compliance (m/N): normal displacement / ``force`` (N)."""
+
+
+class Dome(AbstractMechanics):
+    """Seed 001's hemispherical dome pressed at its apex by a flat plate (PHYSICS.md 2.3).
+
+    The apex moves by -C(F) F along z, C the secant compliance of
+    :func:`magdesign.mechanics.dome_compliance` at that force. A dome carries no
+    modelled shear: shear loads do not move it.
+    """
+
+    outer_radius: Float[Array, ""]
+    thickness: Float[Array, ""]
+    material: AbstractMaterial
+    fidelity: str = eqx.field(static=True)
+    base: str = eqx.field(static=True)
+
+    PARAMETERS: ClassVar = {"mechanics.outer_radius": lambda m: m.outer_radius, "mechanics.thickness": lambda m: m.thickness}
+
+    def compliance(self, force):
+        return mechanics.dome_compliance(
+            outer_radius=self.outer_radius,
+            thickness=self.thickness,
+            material=self.material,
+            max_force=force,
+            fidelity=self.fidelity,
+            base=self.base,
+        )
+
+    def displacement(self, loads):
+        uz = jax.vmap(lambda force: -self.compliance(force) * force)(loads.normal)
+        return jnp.stack([jnp.zeros_like(uz), jnp.zeros_like(uz), uz], axis=-1)
+
+
+class Layer(AbstractMechanics):
+    """A flat elastomer layer of ``thickness`` h under a contact of ``contact_area`` S.
+
+    Displacement (Fx / k_s, Fy / k_s, -Fz / k_n) with the layer stiffness of
+    :func:`magdesign.mechanics.layer_stiffness` (fidelity "hooke" or "bonded").
+    """
+
+    thickness: Float[Array, ""]
+    contact_area: Float[Array, ""]
+    material: AbstractMaterial
+    fidelity: str = eqx.field(static=True)
+
+    PARAMETERS: ClassVar = {"mechanics.thickness": lambda m: m.thickness, "mechanics.contact_area": lambda m: m.contact_area}
+
+    @property
+    def stiffness(self):
+        return mechanics.layer_stiffness(thickness=self.thickness, area=self.contact_area, material=self.material, fidelity=self.fidelity)
+
+    def compliance(self, force):
+        return 1.0 / self.stiffness.normal
+
+    def displacement(self, loads):
+        stiffness = self.stiffness
+        return jnp.concatenate([loads.shear / stiffness.shear, -loads.normal[:, None] / stiffness.normal], axis=-1)

@@ -1,0 +1,164 @@
+"""Seed 000, reduced model: a soft-magnetic pole in a ball over a magnet plate.
+
+A plastic ball of radius r_b carries a Ni-Fe rod (diameter d_p) along a diameter; its
+bottom sits ``gap`` above a permanent-magnet plate (a disc of radius R, thickness t,
+remanence Br = mu0 Hc, top face at z = 0). Tilting the ball by theta about y moves
+the rod's lower tip to c + r_b (sin theta, 0, -cos theta), c the ball's centre.
+
+Reduced (magnetic-charge) model, the cheap fidelity level of PHYSICS.md 1.3: the rod
+is magnetised along its axis by the plate's field at its lower tip, mu0 M = B_axial /
+N_d (a high-permeability rod with demagnetising factor N_d), which puts the magnetic
+charges -/+ Q = mu0 M A_p (T m^2) on its lower / upper end. A charge Q at p adds
+B = Q (r - p) / (4 pi |r - p|^3). The plate is taken as non-permeable (mu_r ~ 1 for a
+sintered magnet), so there is no image charge; the rod's field on itself is left out.
+
+A shear (tangential) force F_x at the ball tilts it by theta = F_x / k_spring, with
+k_spring the published spring coefficient (N/rad; 12.57 uN at 10 deg). A GMR element
+(sensitive along x) sits ``sensor_height`` above the plate at x = ``sensor_offset``.
+
+Against seed 000 (checked, no unit or factor error found: charges in T m^2, field of a
+charge Q r / (4 pi r^3), force Q B / mu0, generalised force per ball radius in N/rad):
+with the example's geometry the model gives a spring coefficient of 7.0e-3 N/rad and a
+field sensitivity of 4.5 mT/deg, against the thesis's 7.2e-5 N/rad (12.57 uN at 10 deg)
+and 0.3 mT/deg (magnet soleplate). Both scale with the rod's induced magnetisation
+(tip field / N_d), which is where the reduced model is weakest: N_d = 0.1 is a guess for
+the rod's aspect ratio, the plate's field falls along the 4 mm rod while the model takes
+it at the tip, and the thesis's FEM has a non-linear B-H curve (its Table 3.1 also lost
+its units). Treat absolute forces of this level as upper bounds; use it for trends.
+
+Outputs (:meth:`PoleScene.outputs`), at theta = 0:
+    field_sensitivity   dB_x / dtheta at the GMR (T/rad)
+    spring_coefficient  the model's own restoring stiffness -dF_t / dtheta, F_t the
+                        generalised force along theta of the plate's pull on the
+                        rod's charges, per ball radius (N/rad); > 0 is restoring
+    attraction          the plate's vertical pull on the rod (N, > 0 downwards)
+"""
+
+from typing import ClassVar
+
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from magdesign.fields import cylinder
+from magdesign.scene.core import AbstractScene
+from magdesign.scene.effects import AbstractEffect
+from magdesign.scene.magnet_scene import SpinValveReadout
+from magdesign.units import MU0
+
+
+def _charge_field(points, position, charge):
+    r = points - position
+    return charge * r / (4.0 * jnp.pi * jnp.sum(r * r, axis=-1, keepdims=True) ** 1.5)
+
+
+class PoleScene(AbstractScene):
+    """Seed 000's reduced model (see the module docstring); SI throughout."""
+
+    plate_radius: Float[Array, ""]
+    plate_thickness: Float[Array, ""]
+    remanence: Float[Array, ""]
+    gap: Float[Array, ""]
+    ball_radius: Float[Array, ""]
+    pole_diameter: Float[Array, ""]
+    demagnetizing_factor: Float[Array, ""]
+    spring: Float[Array, ""]
+    sensor_offset: Float[Array, ""]
+    sensor_height: Float[Array, ""]
+    transducer: SpinValveReadout
+    effects: tuple[AbstractEffect, ...]
+
+    SOURCE_KEY = "magnet.remanence"
+    reading_labels = ("V",)
+    reading_unit = "V"
+    output_units: ClassVar[dict[str, str]] = {"field_sensitivity": "T/rad", "spring_coefficient": "N/rad", "attraction": "N"}
+
+    @property
+    def parameter_paths(self):
+        return {
+            "magnet.radius": lambda s: s.plate_radius,
+            "magnet.height": lambda s: s.plate_thickness,
+            "magnet.remanence": lambda s: s.remanence,
+            "geometry.gap": lambda s: s.gap,
+            "pole.ball_radius": lambda s: s.ball_radius,
+            "pole.diameter": lambda s: s.pole_diameter,
+            "pole.demagnetizing_factor": lambda s: s.demagnetizing_factor,
+            "mechanics.spring": lambda s: s.spring,
+            "sensor.offset": lambda s: s.sensor_offset,
+            "sensor.height": lambda s: s.sensor_height,
+        }
+
+    @property
+    def centre(self):
+        return jnp.array([0.0, 0.0, 1.0]) * (self.gap + self.ball_radius)
+
+    def tip(self, theta):
+        """The rod's lower tip (3,) (m) at tilt ``theta`` (rad)."""
+        return self.centre + self.ball_radius * jnp.stack([jnp.sin(theta), 0.0 * theta, -jnp.cos(theta)])
+
+    def plate_field(self, points):
+        centre = jnp.array([0.0, 0.0, -0.5]) * self.plate_thickness
+        return cylinder(
+            points - centre, radius=self.plate_radius, height=self.plate_thickness, polarization=self.remanence
+        )
+
+    def charges(self, displacement):
+        """Positions (2, 3) (m) and charges (2,) (T m^2) of the rod's lower and upper ends."""
+        tip = self.tip(0.0) + displacement
+        return self._rod(tip, self.plate_field(tip))
+
+    def _rod(self, tip, tip_field):
+        """The rod's charges given its lower tip (3,) (m) and the plate's field there (T)."""
+        top = 2.0 * self.centre - tip
+        axis = (top - tip) / (2.0 * self.ball_radius)
+        area = jnp.pi * self.pole_diameter**2 / 4
+        charge = area * jnp.dot(tip_field, axis) / self.demagnetizing_factor
+        return jnp.stack([tip, top]), jnp.stack([-charge, charge])
+
+    def sensor_poses(self):
+        position = jnp.stack([self.sensor_offset, 0.0 * self.sensor_offset, self.sensor_height])
+        return position[None, :], jnp.eye(3)[None]
+
+    def displacement(self, loads):
+        theta = loads.shear[:, 0] / self.spring
+        return jax.vmap(self.tip)(theta) - self.tip(0.0)
+
+    def source_field(self, points, displacement):
+        # one plate-field evaluation for the points and the rod's tip (one compiled kernel)
+        tip = self.tip(0.0) + displacement
+        flat = points.reshape(-1, 3)
+        both = self.plate_field(jnp.concatenate([flat, tip[None]]))
+        positions, charges = self._rod(tip, both[-1])
+        field = both[:-1].reshape(points.shape)
+        for position, charge in zip(positions, charges):
+            field = field + _charge_field(points, position, charge)
+        return field
+
+    def transduce(self, field):
+        return self.transducer(field)[..., None]
+
+    def _tangential_force(self, theta):
+        """The plate's pull on the rod's charges as a generalised force along theta,
+        per ball radius (N): sum F_i . dp_i/dtheta / r_b."""
+
+        def ends(angle):
+            return self.charges(self.tip(angle) - self.tip(0.0))[0]
+
+        positions, velocities = jax.jvp(ends, (theta,), (jnp.ones_like(theta),))
+        charges = self.charges(self.tip(theta) - self.tip(0.0))[1]
+        forces = charges[:, None] * self.plate_field(positions) / MU0
+        return jnp.sum(forces * velocities) / self.ball_radius
+
+    def outputs(self):
+        sensor = self.sensor_poses()[0][0]
+
+        def bx(theta):
+            return self.source_field(sensor, self.tip(theta) - self.tip(0.0))[0]
+
+        positions, charges = self.charges(jnp.zeros(3))
+        pull = charges[:, None] * self.plate_field(positions) / MU0
+        return {
+            "field_sensitivity": jax.grad(bx)(0.0),
+            "spring_coefficient": -jax.grad(self._tangential_force)(0.0),
+            "attraction": -jnp.sum(pull[:, 2]),
+        }

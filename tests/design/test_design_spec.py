@@ -1,0 +1,68 @@
+"""The [design] table of a spec: parsing, errors naming the key, and the default design."""
+
+import copy
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from magdesign.design import solve
+from magdesign.design.spec import default_spec, problem_from_spec
+from magdesign.fields import cylinder_on_axis
+from magdesign.units import SpecError
+
+EXAMPLES = Path(__file__).parents[2] / "examples"
+
+
+def test_example_dome_hall_spells_out_the_default_design():
+    with open(EXAMPLES / "dome_hall.toml", "rb") as file:
+        example = tomllib.load(file)
+    assert example == default_spec()
+
+
+def test_default_design_meets_its_closed_form_answer():
+    """Seed 001: the closest approach is where the on-axis field is 4.8 mT (5.8458 mm),
+    the rest gap 1.6 mm further (0.32 mm/N x 5 N)."""
+    problem, _ = problem_from_spec(default_spec())
+    result = solve(problem)
+    assert result.status == "successful"
+    closest = result.parameters["geometry.gap"] - 0.32e-3 * 5.0
+    field = cylinder_on_axis(closest, radius=1.5e-3, height=1e-3, remanence=1.17)
+    assert float(field) == pytest.approx(4.8e-3, rel=1e-9)
+    assert result.parameters["geometry.gap"] == pytest.approx(7.4458e-3, abs=1e-7)
+    assert result.targets["compliance"]["achieved"] == pytest.approx(0.32e-3, rel=1e-9)
+    assert result.limits["field_closest"]["active"]
+
+
+def _broken(path, value):
+    spec = copy.deepcopy(default_spec())
+    table = spec
+    for key in path[:-1]:
+        table = table[key]
+    if value is None:
+        del table[path[-1]]
+    else:
+        table[path[-1]] = value
+    return spec
+
+
+@pytest.mark.parametrize(
+    "path, value, key",
+    [
+        (("design", "targets", "compliance"), "0.32", "design.targets.compliance"),
+        (("design", "targets", "compliance"), "0.32 mT", "design.targets.compliance"),
+        (("design", "variables", "magnet.colour"), {"lower": "1 mm", "upper": "2 mm"}, "design.variables.magnet.colour"),
+        (("design", "variables", "geometry.gap"), {"lower": "9 mm", "upper": "5 mm"}, "design.variables.geometry.gap"),
+        (("design", "variables", "geometry.gap"), {"lower": "4 mm", "upper": "9 mm", "start": "12 mm"}, "design.variables.geometry.gap"),
+        (("design", "variables", "geometry.gap"), {"lower": "4 mm"}, "design.variables.geometry.gap.upper"),
+        (("design", "limits", "field_closest"), {"upper": "4.8 mT", "at": "1"}, "design.limits.field_closest.at"),
+        (("design", "objective"), {"maximize": "happiness"}, "design.objective.maximize"),
+        (("design", "targets", "wow"), "1 m", "design.targets.wow"),
+        (("design",), None, "design"),
+    ],
+)
+def test_bad_design_specs_name_the_key(path, value, key):
+    with pytest.raises(SpecError) as error:
+        problem_from_spec(_broken(path, value))
+    message = str(error.value)
+    assert message.startswith(key) and "\n" not in message

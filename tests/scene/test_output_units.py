@@ -1,0 +1,17 @@
+"""Every output of every example scene names an SI unit the spec parser reads."""
+
+import jax
+import pytest
+
+from magdesign.scene import outputs, scene_from_spec
+from magdesign.units import parse
+from scene_helpers import EXAMPLES, example
+
+
+@pytest.mark.parametrize("name", sorted(path.stem for path in EXAMPLES.glob("*.toml")))
+def test_every_output_has_a_parsable_unit(name):
+    scene = scene_from_spec(example(name))
+    names = jax.eval_shape(outputs, scene)
+    assert set(names) == set(type(scene).output_units)
+    for output, unit in scene.output_units.items():
+        assert parse(f"1 {unit}", unit, key="x") == 1.0, output
