@@ -8,7 +8,7 @@ Numbers are stored as float64 arrays so that a jitted solve is compiled once per
 structure (names, model, senses) and reused for new bounds, starts and target values.
 """
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -152,7 +152,8 @@ class Problem(eqx.Module):
         model: ``model({variable: scalar (SI)}) -> {output: scalar (SI)}``, jax-traceable.
         variables: the free parameters (at least one).
         targets: equalities on outputs; limits: inequalities; objective: optional.
-        report: further outputs to evaluate and report at the solution.
+        report: further outputs to evaluate and report at the solution: names, or
+            {name: display unit ("mm") or None for SI}.
     """
 
     model: Callable
@@ -161,6 +162,7 @@ class Problem(eqx.Module):
     limits: tuple[Limit, ...]
     objective: Objective | None
     report: tuple[str, ...] = eqx.field(static=True)
+    report_units: tuple[tuple[str, str | None], ...] = eqx.field(static=True)
 
     def __init__(self, model, variables, targets=(), limits=(), objective=None, report=()):
         self.model = model
@@ -168,7 +170,9 @@ class Problem(eqx.Module):
         self.targets = tuple(targets)
         self.limits = tuple(limits)
         self.objective = objective
-        self.report = tuple(report)
+        report_units = dict(report) if isinstance(report, Mapping) else dict.fromkeys(report)
+        self.report = tuple(report_units)
+        self.report_units = tuple(report_units.items())
         if not self.variables:
             raise ValueError("variables: a problem needs at least one free variable")
         for kind, names in (

@@ -93,6 +93,7 @@ class DesignResult(eqx.Module):
         units = {v.name: v.unit for v in problem.variables}
         units.update({t.output: t.unit for t in problem.targets})
         units.update({lim.output: lim.unit for lim in problem.limits})
+        units.update(problem.report_units)
         return cls(
             status=STATUS_NAMES[int(solution.status)],
             parameters=dict(zip(names, x)),
@@ -126,29 +127,33 @@ class DesignResult(eqx.Module):
         }
 
     def table(self) -> str:
-        """A readable report: parameters, targets, limits, status and time."""
-        unit = lambda name: self.units.get(name)  # noqa: E731
-        lines = ["parameter        value"]
+        """A readable report: parameters, targets, limits, other outputs, status and time."""
+        unit = self.units.get
+        shown = sorted(set(self.targets) | set(self.limits))
+        others = [name for name in self.outputs if name not in shown]
+        width = max(len(name) for name in [*self.parameters, *shown, *others, "parameter"]) + 2
+        row = lambda *cells: "  " + "".join(f"{cell:<{width if i == 0 else 18}}" for i, cell in enumerate(cells)).rstrip()  # noqa: E731
+        lines = [row("parameter", "value")]
         for name, value in self.parameters.items():
-            bound = f"  (on {self.active_bounds[name]} bound)" if name in self.active_bounds else ""
-            lines.append(f"  {name:<15}{_shown(value, unit(name))}{bound}")
+            bound = f"(on {self.active_bounds[name]} bound)" if name in self.active_bounds else ""
+            lines.append(row(name, _shown(value, unit(name)), bound))
         if self.targets:
-            lines.append("target           wanted          achieved        met")
+            lines.append(row("target", "wanted", "achieved", "met"))
             for name, t in self.targets.items():
                 met = "no" if name in self.violated else "yes"
-                lines.append(
-                    f"  {name:<15}{_shown(t['target'], unit(name)):<16}{_shown(t['achieved'], unit(name)):<16}{met}"
-                )
+                lines.append(row(name, _shown(t["target"], unit(name)), _shown(t["achieved"], unit(name)), met))
         if self.limits:
-            lines.append("limit            bound           achieved        active")
+            lines.append(row("limit", "bound", "achieved", "active"))
             for name, lim in self.limits.items():
                 bounds = " ".join(
                     f"{'<=' if side == 'upper' else '>='} {_shown(lim[side], unit(name))}"
                     for side in ("upper", "lower")
                     if side in lim
                 )
-                active = "yes" if lim["active"] else "no"
-                lines.append(f"  {name:<15}{bounds:<16}{_shown(lim['achieved'], unit(name)):<16}{active}")
+                lines.append(row(name, bounds, _shown(lim["achieved"], unit(name)), "yes" if lim["active"] else "no"))
+        if others:
+            lines.append(row("output", "value"))
+            lines.extend(row(name, _shown(self.outputs[name], unit(name))) for name in others)
         violated = f" (not met: {', '.join(self.violated)})" if self.violated else ""
         lines.append(f"status: {self.status}{violated}   steps: {self.steps}   time: {self.seconds * 1e3:.3g} ms")
         return "\n".join(lines)

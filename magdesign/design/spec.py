@@ -8,8 +8,8 @@
     field_closest = { upper = "4.8 mT" }
     [design.objective]                       # optional: maximize or minimize one output
     maximize = "sensitivity"
-    [design]
-    report = ["closest_gap"]                 # optional: more outputs to show in the report
+    [design.report]                          # optional: more outputs to show, with display units
+    closest_gap = "mm"
 
 A variable's bounds take the unit the scene spec gives that parameter; a target's or
 limit's value takes the unit of its output (the scene's ``output_units``). Every error is
@@ -162,10 +162,15 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         (sense, name), = objective_table.items()
         objective = Objective(output_name(f"design.objective.{sense}", name), sense=_SENSES[sense])
 
-    report = design.get("report", [])
-    if not isinstance(report, list):
-        raise SpecError(f"design.report: expected a list of output names, got {report!r}")
-    report = [output_name("design.report", name) for name in report]
+    report = design.get("report", {})
+    if isinstance(report, list):
+        report = dict.fromkeys(report)
+    if not isinstance(report, dict):
+        raise SpecError(f"design.report: expected output names with display units, e.g. {{ closest_gap = \"mm\" }}, got {report!r}")
+    for name, unit in report.items():
+        output_name(f"design.report.{name}", name)
+        if unit is not None:
+            parse(f"1 {unit}", output_units.get(name, "1"), key=f"design.report.{name}")
 
     if not targets and not limits and objective is None:
         raise SpecError("design: expected at least one of [design.targets], [design.limits], [design.objective]")

@@ -17,6 +17,7 @@ Outputs (:meth:`MagnetScene.outputs`), at the sweep's largest normal force F:
     inplane_field_max  largest |B_a| (the chip's sensitive in-plane axis) over the
                        sensors and over OUTPUT_POINTS loads from 0 to F (T)
     inplane_field_min  the smallest (most negative) B_a over the same (T)
+    outer_radius       the dome's outer radius (m), for dome scenes only
 """
 
 from typing import ClassVar
@@ -94,6 +95,7 @@ class MagnetScene(AbstractScene):
         "sensitivity": "T/N",
         "inplane_field_max": "T",
         "inplane_field_min": "T",
+        "outer_radius": "m",
     }
 
     @property
@@ -154,6 +156,7 @@ class MagnetScene(AbstractScene):
             "sensitivity": (field_closest - field_rest) / force,
             "inplane_field_max": jnp.max(jnp.abs(inplane)),
             "inplane_field_min": jnp.min(inplane),
+            **self.mechanics.outputs(),
         }
 
     def probe_points(self):

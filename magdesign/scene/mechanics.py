@@ -46,6 +46,10 @@ class AbstractMechanics(eqx.Module):
     def compliance(self, force: Float[Array, ""]) -> Float[Array, ""]:
         """Secant normal compliance (m/N): normal displacement / ``force`` (N)."""
 
+    def outputs(self) -> dict[str, Float[Array, ""]]:
+        """Scalar outputs of the mechanics' own geometry for design objectives (SI)."""
+        return {}
+
 
 class Dome(AbstractMechanics):
     """Seed 001's hemispherical dome pressed at its apex by a flat plate (PHYSICS.md 2.3).
@@ -72,6 +76,9 @@ class Dome(AbstractMechanics):
             fidelity=self.fidelity,
             base=self.base,
         )
+
+    def outputs(self):
+        return {"outer_radius": self.outer_radius}
 
     def displacement(self, loads):
         uz = jax.vmap(lambda force: -self.compliance(force) * force)(loads.normal)

@@ -1,0 +1,251 @@
+"""What accuracy costs in time: every model's fidelity levels, measured on this machine.
+
+For each model, each level's error against the model's most exact level over a fixed set
+of representative cases (below), and the warm, jitted time of one evaluation (median of
+repeats). ``magdesign accuracy`` prints them side by side.
+
+The cases:
+- cylinder field: the seed-001 magnet (R 1.5 mm, D 1 mm, 1.17 T) at 2,000 points on a
+  fixed grid of sensor positions 1.5..20 radii from its centre, all directions; error is
+  the largest |B - B_exact| / |B_exact|; one evaluation is one point (the batch time over
+  the point count). float32 runs the exact kernel on float32 inputs.
+- sensor area averaging: the seed-002 spin-valve active area (200 x 95 um) at 64 chip
+  positions 0.6..2 mm above the 1 x 1 mm magnet; n = 1, 4, 16, 64 Gauss nodes against 256;
+  error is the largest |B_n - B_256| / max |B_256|. One evaluation is one chip.
+- elastomer layer: normal stiffness, Hooke against the bonded-layer correction, for
+  discs of shape factor 0.25..2 (seed-004 Ecoflex, nu 0.49); one evaluation is one layer.
+- dome: secant compliance at 5 N of seed-001-like domes (R_o 8 mm, t = 1.5, 2, 2.5 mm),
+  Reissner and the axisymmetric model at three meshes against the finest mesh.
+- default design: the parameters of the default design solved at each dome level, against
+  the axisymmetric level (default mesh); error is the largest parameter move in metres (unit "m"), time is one solve.
+"""
+
+import statistics
+import time
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from matplotlib.figure import Figure
+
+from magdesign.design import solve
+from magdesign.design.spec import default_spec, problem_from_spec
+from magdesign.fields import cylinder
+from magdesign.mechanics import LinearElastic, MooneyRivlin, dome_compliance, layer_stiffness
+from magdesign.scene.effects import AreaAveraging
+from magdesign.units import mm, um
+
+REPEATS = 7
+DOME_MESHES = ((1, 8), (2, 16), (4, 32))
+AREA_POINTS_PER_SIDE = (1, 2, 4, 8)
+AREA_REFERENCE_POINTS = 16
+
+SEED001_MAGNET = dict(radius=1.5 * mm, height=1 * mm, polarization=1.17)
+SEED002_MAGNET = dict(radius=0.5 * mm, height=1 * mm, polarization=1.3)
+SEED001_RESIN = MooneyRivlin(c10=0.1182e6, c01=0.1769e6)
+
+
+class Row(NamedTuple):
+    """One measured level: error against the model's most exact level, and its cost.
+
+    error is relative (unit "relative") except for decision rows (unit "m"); seconds is
+    the warm time of one evaluation (s); cases says what one evaluation is.
+    """
+
+    model: str
+    fidelity: str
+    error: float
+    seconds: float
+    unit: str
+    cases: str
+
+
+def _warm_seconds(fn, *args, per=1):
+    """Median wall time (s) of ``fn(*args)`` after one warm-up call, divided by ``per``."""
+    jax.block_until_ready(fn(*args))
+    times = []
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        jax.block_until_ready(fn(*args))
+        times.append(time.perf_counter() - start)
+    return statistics.median(times) / per
+
+
+def _field_points():
+    """2,000 fixed sensor positions 1.5..20 radii from the seed-001 magnet's centre (m)."""
+    rng = np.random.default_rng(2026)
+    directions = rng.normal(size=(2000, 3))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    distances = SEED001_MAGNET["radius"] * np.geomspace(1.5, 20.0, 2000)
+    return directions * distances[:, None]
+
+
+def _relative_error(approx, exact):
+    return float(np.max(np.linalg.norm(np.asarray(approx) - np.asarray(exact), axis=-1) / np.linalg.norm(exact, axis=-1)))
+
+
+def measure_field():
+    points = jnp.asarray(_field_points())
+    exact_fn = jax.jit(lambda p: cylinder(p, **SEED001_MAGNET, fidelity="exact"))
+    dipole_fn = jax.jit(lambda p: cylinder(p, **SEED001_MAGNET, fidelity="dipole"))
+    exact = exact_fn(points)
+    points32 = points.astype(jnp.float32)
+    rows = []
+    for fidelity, fn, args in (("exact", exact_fn, points), ("dipole", dipole_fn, points), ("exact float32", exact_fn, points32)):
+        error = _relative_error(fn(args).astype(jnp.float64), exact)
+        rows.append(Row("cylinder field", fidelity, error, _warm_seconds(fn, args, per=len(points)), "relative", "one point"))
+    return rows
+
+
+def measure_area_averaging():
+    """Area averaging of the field over a spin-valve's active area, n Gauss nodes."""
+    xs, ys = np.meshgrid(np.linspace(-2 * mm, 2 * mm, 8), np.linspace(-2 * mm, 2 * mm, 8), indexing="ij")
+    heights = np.linspace(1.1 * mm, 2.5 * mm, 64)  # 0.6..2 mm above the top face
+    centres = jnp.asarray(np.stack([xs.ravel(), ys.ravel(), heights], axis=-1))
+    rotations = jnp.broadcast_to(jnp.eye(3), (centres.shape[0], 3, 3))
+    size = jnp.array([200 * um, 95 * um])
+
+    def averaged(points_per_side):
+        offsets, weights = AreaAveraging(size=size, points=points_per_side).nodes(rotations)
+        return jax.jit(lambda c: jnp.einsum("sqi,q->si", cylinder(c[:, None, :] + offsets, **SEED002_MAGNET), weights))
+
+    reference = averaged(AREA_REFERENCE_POINTS)(centres)
+    scale = float(jnp.max(jnp.linalg.norm(reference, axis=-1)))
+    rows = []
+    for per_side in AREA_POINTS_PER_SIDE:
+        fn = averaged(per_side)
+        error = float(jnp.max(jnp.linalg.norm(fn(centres) - reference, axis=-1))) / scale
+        rows.append(Row("sensor area averaging", f"n={per_side**2}", error, _warm_seconds(fn, centres, per=64), "relative", "one chip"))
+    return rows
+
+
+def measure_layer():
+    material = LinearElastic(E=83e3, nu=0.49)
+    thickness = 3.5 * mm
+    shape_factors = jnp.linspace(0.25, 2.0, 8)
+    areas = jnp.pi * (2 * shape_factors * thickness) ** 2  # disc: S_f = a / (2 h)
+
+    def stiffness(fidelity):
+        return jax.jit(jax.vmap(lambda a: layer_stiffness(thickness=thickness, area=a, material=material, fidelity=fidelity).normal))
+
+    reference = stiffness("bonded")(areas)
+    rows = []
+    for fidelity in ("bonded", "hooke"):
+        fn = stiffness(fidelity)
+        error = float(jnp.max(jnp.abs(fn(areas) - reference) / reference))
+        rows.append(Row("elastomer layer", fidelity, error, _warm_seconds(fn, areas, per=len(areas)), "relative", "one layer"))
+    return rows
+
+
+def measure_dome():
+    thicknesses = (1.5 * mm, 2.0 * mm, 2.5 * mm)
+
+    def compliance(fidelity, mesh):
+        options = dict(mesh=mesh) if fidelity == "axisymmetric" else {}
+        return jax.jit(
+            lambda t: dome_compliance(
+                outer_radius=8 * mm, thickness=t, material=SEED001_RESIN, max_force=5.0, fidelity=fidelity, **options
+            )
+        )
+
+    levels = [("reissner", None)] + [("axisymmetric", mesh) for mesh in DOME_MESHES]
+    values, seconds = {}, {}
+    for fidelity, mesh in levels:
+        fn = compliance(fidelity, mesh)
+        values[fidelity, mesh] = np.array([float(fn(t)) for t in thicknesses])
+        seconds[fidelity, mesh] = _warm_seconds(fn, thicknesses[1])
+    reference = values["axisymmetric", DOME_MESHES[-1]]
+    return [
+        Row(
+            "dome compliance",
+            fidelity if mesh is None else f"{fidelity} {mesh[0]}x{mesh[1]}",
+            float(np.max(np.abs(values[fidelity, mesh] - reference) / reference)),
+            seconds[fidelity, mesh],
+            "relative",
+            "one 5 N load path",
+        )
+        for fidelity, mesh in levels
+    ]
+
+
+def measure_default_design():
+    """The decision: how far the default design moves between dome levels, and its cost."""
+    solved = {}
+    for fidelity in ("reissner", "axisymmetric"):
+        problem, _ = problem_from_spec(default_spec(), fidelity=fidelity)
+        solve(problem)  # compile
+        result = solve(problem)
+        solved[fidelity] = (result, result.seconds)
+    reference = solved["axisymmetric"][0].parameters
+    return [
+        Row(
+            "default design",
+            fidelity,
+            max(abs(result.parameters[name] - reference[name]) for name in reference),
+            seconds,
+            "m",
+            "one solve",
+        )
+        for fidelity, (result, seconds) in solved.items()
+    ]
+
+
+MEASUREMENTS = (
+    ("cylinder field", measure_field),
+    ("sensor area averaging", measure_area_averaging),
+    ("elastomer layer", measure_layer),
+    ("dome compliance", measure_dome),
+    ("default design", measure_default_design),
+)
+
+
+def measure(progress=None) -> list[Row]:
+    """Measure every model; ``progress`` (a text stream) is told which one runs."""
+    rows = []
+    for name, fn in MEASUREMENTS:
+        if progress is not None:
+            print(f"measuring {name} ...", file=progress, flush=True)
+        rows.extend(fn())
+    return rows
+
+
+def table(rows) -> str:
+    """The rows as a readable table: error (relative, or um for decisions) beside time."""
+    lines = [f"{'model':<24}{'fidelity':<22}{'error':>14}{'time':>14}  per", "-" * 86]
+    for row in rows:
+        error = f"{row.error / um:.3g} um" if row.unit == "m" else f"{row.error:.2e}"
+        lines.append(f"{row.model:<24}{row.fidelity:<22}{error:>14}{_seconds(row.seconds):>14}  {row.cases}")
+    return "\n".join(lines)
+
+
+def _seconds(value):
+    for unit, factor in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6)):
+        if value >= factor:
+            return f"{value / factor:.3g} {unit}"
+    return f"{value / 1e-9:.3g} ns"
+
+
+def plot(rows, path):
+    """Write a log-log PNG of error against time, one line per model (reference levels,
+    whose error is 0 by definition, are left out)."""
+    figure = Figure(figsize=(11, 4.5))
+    axes = figure.subplots(1, 2)
+    for axis, unit, label in ((axes[0], "relative", "relative error"), (axes[1], "m", "parameter move (m)")):
+        for model in dict.fromkeys(row.model for row in rows if row.unit == unit):
+            points = [(r.seconds, r.error, r.fidelity) for r in rows if r.model == model and r.error > 0]
+            if not points:
+                continue
+            x, y, names = zip(*points)
+            axis.loglog(x, y, "o-", label=model)
+            for xi, yi, name in points:
+                axis.annotate(name, (xi, yi), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        axis.set_xlabel("time per evaluation (s)")
+        axis.set_ylabel(label)
+        axis.grid(alpha=0.3, which="both")
+        axis.legend(fontsize=8)
+    axes[0].set_title("model levels against the most exact level")
+    axes[1].set_title("default design against the axisymmetric dome")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)

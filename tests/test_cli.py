@@ -1,0 +1,73 @@
+"""The magdesign command: JSON contract, exit codes, one-line errors."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from magdesign.cli import main
+
+EXAMPLES = Path(__file__).parents[1] / "examples"
+
+
+def test_solve_default_prints_the_json_contract(capsys):
+    assert main(["solve", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["status"] == "successful"
+    assert set(result) >= {"status", "parameters", "targets", "steps", "seconds"}
+    assert result["parameters"]["geometry.gap"] == pytest.approx(7.4458e-3, abs=1e-7)
+    assert result["targets"]["compliance"]["target"] == pytest.approx(0.32e-3)
+    assert isinstance(result["steps"], int) and result["seconds"] > 0
+
+
+def test_solve_table_and_plot(capsys, tmp_path):
+    plot = tmp_path / "design.png"
+    assert main(["solve", str(EXAMPLES / "dome_hall.toml"), "--plot", str(plot)]) == 0
+    out = capsys.readouterr().out
+    assert "geometry.gap" in out and "successful" in out
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_infeasible_design_exits_3_and_names_the_target(capsys, tmp_path):
+    spec = (EXAMPLES / "dome_hall.toml").read_text()
+    spec = spec.replace('"mechanics.thickness" = { lower = "1.5 mm", upper = "4 mm", start = "2 mm" }',
+                        '"mechanics.thickness" = { lower = "5 mm", upper = "6 mm", start = "5.5 mm" }')
+    path = tmp_path / "infeasible.toml"
+    path.write_text(spec)
+    assert main(["solve", str(path), "--json"]) == 3
+    result = json.loads(capsys.readouterr().out)
+    assert result["status"] != "successful"
+    assert "compliance" in result["violated"]
+    assert all(value == value for value in result["parameters"].values())  # no NaN
+
+
+@pytest.mark.parametrize(
+    "old, new, key",
+    [
+        ('radius = "1.5 mm"', 'radius = "1.5"', "magnet.radius"),
+        ('compliance = "0.32 mm/N"', 'compliance = "0.32 mT"', "design.targets.compliance"),
+        ('effects = ["saturation", "quantisation"]', 'effects = ["saturation", "gremlins"]', "scene.effects"),
+    ],
+)
+def test_bad_spec_exits_2_with_one_line_naming_the_key(tmp_path, old, new, key):
+    text = (EXAMPLES / "dome_hall.toml").read_text()
+    assert old in text
+    path = tmp_path / "bad.toml"
+    path.write_text(text.replace(old, new))
+    run = subprocess.run([sys.executable, "-m", "magdesign", "solve", str(path)], capture_output=True, text=True)
+    assert run.returncode == 2
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and key in lines[0] and "Traceback" not in run.stderr
+
+
+def test_missing_spec_file_exits_2(capsys):
+    assert main(["simulate", "no/such/spec.toml"]) == 2
+    assert "no/such/spec.toml" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("example", sorted(p.name for p in EXAMPLES.glob("*.toml")))
+def test_every_example_simulates(example, capsys):
+    assert main(["simulate", str(EXAMPLES / example), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)
