@@ -152,6 +152,13 @@ def _jet(problem, y, theta) -> Jet:
         J, (v, outputs) = jax.jacfwd(values, has_aux=True)(y)
         return J, (J, v, outputs)
 
+    if problem.objective is None:
+        # Without an objective every multiplier is 0 at the solution, so the Lagrangian's
+        # curvature (multipliers times H) vanishes: first derivatives suffice, and tracing
+        # no second ones keeps models with costly kernels quick to compile.
+        J, (_, v, outputs) = first(y)
+        return Jet(v, J, jnp.zeros((*J.shape, y.shape[0])), outputs)
+
     H, (J, v, outputs) = jax.jacfwd(first, has_aux=True)(y)
     return Jet(v, J, H, outputs)
 
