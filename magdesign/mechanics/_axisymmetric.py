@@ -235,7 +235,7 @@ def tangent(mesh, mask, y, params, project=False):
     n = mesh.n_dof + 1
     H = jnp.zeros((n, n)).at[dofs[:, :, None], dofs[:, None, :]].add(H_elem)
     H = H.at[contact_dofs[:, None], contact_dofs[None, :]].add(H_contact)
-    return mask[:, None] * H * mask[None, :] + np.diag(1 - mask)
+    return mask[:, None] * H * mask[None, :] + jnp.diag(1 - mask)
 
 
 def _factor(H):
@@ -299,55 +299,58 @@ def _newton(mesh, mask, params, y0, held, tol=DOME_NEWTON_TOL):
     return y, step <= tol, iterations
 
 
-def plate_force(mesh, y, params):
-    """Force (N) the plate transmits in state y: d(elastic + contact energy) / dd."""
-    return jax.grad(potential, argnums=1)(mesh, y, params[:3] + (0.0,))[-1]
+def _solve_stages(mesh, params, forces, start_travel, start_tol):
+    """States (n, n_dof + 1), converged flags and Newton iteration counts (n,) under each
+    of ``forces`` (n,) (N) in turn. Stage 0 holds the plate at ``start_travel`` (m) from
+    the undeformed dome (to tolerance ``start_tol``), establishing contact; then each
+    force is held in turn, warm-started from the previous state. One compiled Newton
+    iteration serves all stages (mask, held values and tolerance are data)."""
+    n, size = forces.shape[0], mesh.n_dof + 1
+    masks = np.stack([mesh.mask(False)] + [mesh.mask(True)] * n)
+    tols = jnp.concatenate([jnp.asarray(start_tol, float)[None], jnp.full(n, DOME_NEWTON_TOL)])
+    stage_forces = jnp.concatenate([jnp.zeros(1), forces])
+    helds = jnp.zeros((n + 1, size)).at[0, -1].set(start_travel)
+
+    def stage(y, inputs):
+        mask, tol, force, held = inputs
+        y, converged, iterations = _newton(mesh, mask, params + (force,), y, held, tol)
+        return y, (y, converged, iterations)
+
+    _, (states, converged, iterations) = lax.scan(stage, jnp.zeros(size), (masks, tols, stage_forces, helds))
+    return states[1:], converged[1:], iterations
 
 
-def displacement_path(mesh, params, travels, tol=DOME_NEWTON_TOL):
-    """Equilibria (n, n_dof + 1), plate forces (n,), converged flags and Newton iteration
-    counts (n,) with the plate
-    held at each of ``travels`` (n,) (m) in turn; params' force is not used."""
-    mask = mesh.mask(False)
-    params = params[:3] + (0.0,)
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 4))
+def equilibria(mesh, params, forces, start_travel, start_tol):
+    """The equilibria under each of ``forces`` (n,) (N), plate travel free, with implicit
+    derivatives with respect to params = (outer_radius (m), thickness (m), material) and
+    the forces. Returns (states (n, n_dof + 1), converged (n,) bool).
 
-    def step(carry, travel):
-        y, y_prev, travel_prev = carry
-        # secant predictor: extrapolate the last increment to the new travel
-        ratio = safe_div(travel - travel_prev, travel_prev - y_prev[-1])
-        guess = y + ratio * (y - y_prev)
-        held = jnp.zeros(mesh.n_dof + 1).at[-1].set(travel)
-        y_new, ok, iterations = _newton(mesh, mask, params, guess, held, tol)
-        return (y_new, y, travel), (y_new, plate_force(mesh, y_new, params), ok, iterations)
-
-    y0 = jnp.zeros(mesh.n_dof + 1)
-    _, out = lax.scan(step, (y0, y0, jnp.zeros(())), travels)
-    return out
-
-
-@functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
-def equilibrium(mesh, params, y0):
-    """The equilibrium under params' plate force (plate travel free), reached by Newton
-    from the nearby state y0 (n_dof + 1,); implicit derivatives with respect to params.
-
-    Returns (state (n_dof + 1,), converged (bool)). The derivative with respect to y0 is
-    zero: the equilibrium does not depend on where Newton starts.
+    ``start_travel`` (m) and ``start_tol`` only set where Newton starts (see
+    :func:`_solve_stages`); the equilibria, hence the derivatives, do not depend on them.
     """
+    return _solve_stages(mesh, params, forces, start_travel, start_tol)[:2]
+
+
+@equilibria.defjvp
+def _equilibria_jvp(mesh, start_tol, primals, tangents):
+    params, forces, start_travel = primals
+    params_dot, forces_dot, _ = tangents
+    states, converged = equilibria(mesh, params, forces, start_travel, start_tol)
     mask = mesh.mask(True)
-    return _newton(mesh, mask, params, y0, jnp.zeros_like(y0))[:2]
 
+    def state_tangent(y, force, force_dot):
+        held = jnp.zeros_like(y)
+        _, r_dot = jax.jvp(
+            lambda p, f: residual(mesh, mask, y, held, p + (f,)), (params, force), (params_dot, force_dot)
+        )
+        full = params + (force,)
+        L = _factor(tangent(mesh, mask, y, full))
 
-@equilibrium.defjvp
-def _equilibrium_jvp(mesh, primals, tangents):
-    params, y0 = primals
-    params_dot, _ = tangents
-    y, ok = equilibrium(mesh, params, y0)
-    mask, held = mesh.mask(True), jnp.zeros_like(y0)
-    _, r_dot = jax.jvp(lambda p: residual(mesh, mask, y, held, p), (params,), (params_dot,))
-    L = _factor(tangent(mesh, mask, y, params))
+        def matvec(v):
+            return jax.jvp(lambda z: residual(mesh, mask, z, held, full), (y,), (v,))[1]
 
-    def matvec(v):
-        return jax.jvp(lambda z: residual(mesh, mask, z, held, params), (y,), (v,))[1]
+        return lax.custom_linear_solve(matvec, -r_dot, lambda _, b: _cho_solve(L, b), symmetric=True)
 
-    y_dot = lax.custom_linear_solve(matvec, -r_dot, lambda _, b: _cho_solve(L, b), symmetric=True)
-    return (y, ok), (y_dot, np.zeros((), dtype=jax.dtypes.float0))
+    states_dot = jax.vmap(state_tangent)(states, forces, forces_dot)
+    return (states, converged), (states_dot, np.zeros(converged.shape, dtype=jax.dtypes.float0))

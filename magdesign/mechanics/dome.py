@@ -70,19 +70,12 @@ def _reissner_compliance(outer_radius, thickness, material):
 def _axisymmetric_travels(outer_radius, thickness, material, forces, base, mesh):
     """Plate travels (m) and converged flags at each of ``forces`` (n,) (N), increasing."""
     m = _axisymmetric.Mesh(int(mesh[0]), int(mesh[1]), base)
-    geometry = (outer_radius, thickness, material)
-    # starting state: no derivatives flow through it (the equilibria do not depend on it)
-    fixed = lax.stop_gradient(geometry)
+    params = (outer_radius, thickness, material)
+    fixed = lax.stop_gradient(params)
     start = START_TRAVEL_FRACTION * _reissner_compliance(*fixed) * lax.stop_gradient(forces[0])
     start = jnp.minimum(start, fixed[0] / 2)
-    states, _, _, _ = _axisymmetric.displacement_path(m, fixed + (0.0,), start[None], START_TOL)
-
-    def solve(y, force):
-        y, converged = _axisymmetric.equilibrium(m, geometry + (force,), y)
-        return y, (y[-1], converged)
-
-    _, (travels, converged) = lax.scan(solve, states[-1], forces)
-    return travels, converged
+    states, converged = _axisymmetric.equilibria(m, params, forces, start, START_TOL)
+    return states[:, -1], converged
 
 
 def _effective_force(max_force, thickness, material):

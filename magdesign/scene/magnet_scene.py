@@ -87,7 +87,7 @@ class MagnetScene(AbstractScene):
     fidelity: str = eqx.field(static=True, default="exact")
 
     SOURCE_KEY = "magnet.remanence"
-    output_units: ClassVar[dict[str, str]] = {
+    OUTPUT_UNITS: ClassVar[dict[str, str]] = {
         "compliance": "m/N",
         "closest_gap": "m",
         "field_rest": "T",
@@ -95,8 +95,11 @@ class MagnetScene(AbstractScene):
         "sensitivity": "T/N",
         "inplane_field_max": "T",
         "inplane_field_min": "T",
-        "outer_radius": "m",
     }
+
+    @property
+    def output_units(self):
+        return {**self.OUTPUT_UNITS, **self.mechanics.output_units}
 
     @property
     def parameter_paths(self):

@@ -29,6 +29,7 @@ class AbstractMechanics(eqx.Module):
 
     material: eqx.AbstractVar[AbstractMaterial]
     PARAMETERS: ClassVar[dict]
+    output_units: ClassVar[dict[str, str]] = {}
 
     @property
     def parameter_paths(self) -> dict:
@@ -76,6 +77,8 @@ class Dome(AbstractMechanics):
             fidelity=self.fidelity,
             base=self.base,
         )
+
+    output_units: ClassVar = {"outer_radius": "m"}
 
     def outputs(self):
         return {"outer_radius": self.outer_radius}

@@ -12,6 +12,6 @@ from scene_helpers import EXAMPLES, example
 def test_every_output_has_a_parsable_unit(name):
     scene = scene_from_spec(example(name))
     names = jax.eval_shape(outputs, scene)
-    assert set(names) == set(type(scene).output_units)
+    assert set(names) == set(scene.output_units)
     for output, unit in scene.output_units.items():
         assert parse(f"1 {unit}", unit, key="x") == 1.0, output
