@@ -167,3 +167,14 @@ def safe_atan2(y, x):
     is_zero = scale == 0.0
     safe_scale = jnp.where(is_zero, 1.0, scale)
     return jnp.where(is_zero, 0.0, jnp.arctan2(y / safe_scale, jnp.where(is_zero, 1.0, x / safe_scale)))
+# Smallest plate force of the axisymmetric dome, as a fraction of mu t^2: below it the
+# compliance at this force is returned. Smaller loads press the plate into the dome by
+# less than ~100 contact-smoothing widths (CONTACT_SMOOTHING t), where the smoothed
+# contact, not the dome, sets the answer and the force-held Newton solve loses its
+# footing; the secant compliance of a frictionless contact has no finite zero-load
+# limit anyway (Hertz-like indentation, d ~ F^(2/3)).
+DOME_MIN_FORCE_FRACTION = 1e-2
+# Newton tolerance (fraction of the wall) of the axisymmetric dome's first, plate-held
+# solve: it only provides the starting state of the force-held solves, which are
+# converged to DOME_NEWTON_TOL; a tighter start costs iterations and changes nothing.
+DOME_START_TOL = 1e-4

@@ -159,10 +159,19 @@ def _element_energy(X, u, material):
     volume = 2 * jnp.pi * R * det * _W  # reference ring volume of each point (m^3)
     # Jbar: L2 projection of J onto {1, xi, eta} over the element (Q9/P3)
     mass = _P.T @ (volume[:, None] * _P)
-    J_bar = _P @ jnp.linalg.solve(mass, _P.T @ (volume * J))
-    w_iso = jax.vmap(material.strain_energy)(jnp.cbrt(1 / J)[:, None, None] * F)
-    w_vol = jax.vmap(material.strain_energy)(jnp.cbrt(J_bar)[:, None, None] * jnp.eye(3))
-    return jnp.sum(volume * (w_iso + w_vol))
+    J_bar = _P @ (_inverse3(mass) @ (_P.T @ (volume * J)))
+    # isochoric part W(J^-1/3 F) and volumetric part W(Jbar^1/3 I) in one call
+    stretched = jnp.concatenate(
+        [jnp.cbrt(1 / J)[:, None, None] * F, jnp.cbrt(J_bar)[:, None, None] * jnp.eye(3)]
+    )
+    densities = jax.vmap(material.strain_energy)(stretched)
+    return jnp.sum(jnp.concatenate([volume, volume]) * densities)
+
+
+def _inverse3(M):
+    """Inverse of a 3 x 3 matrix by cofactors (smaller compiled code than an LU)."""
+    adjugate_T = jnp.stack([jnp.cross(M[1], M[2]), jnp.cross(M[2], M[0]), jnp.cross(M[0], M[1])])
+    return adjugate_T.T / jnp.dot(M[0], adjugate_T[0])
 
 
 def _contact_energy(X_edge, z_edge, d, outer_radius, thickness, material):
@@ -243,20 +252,18 @@ def _factor(H):
     makes it positive definite (lambda = 0 first, then DOME_LEVENBERG_START times the
     largest diagonal entry, growing tenfold)."""
     scale = DOME_LEVENBERG_START * jnp.max(jnp.abs(jnp.diag(H)))
-    eye = jnp.eye(H.shape[0])
-
-    def attempt(shift):
-        return jnp.linalg.cholesky(H + shift * eye)
 
     def cond(carry):
-        L, k = carry
-        return ~jnp.all(jnp.isfinite(L)) & (k < LEVENBERG_MAX)
+        _, ok, k = carry
+        return ~ok & (k < LEVENBERG_MAX)
 
     def body(carry):
-        _, k = carry
-        return attempt(scale * 10.0**k), k + 1
+        _, _, k = carry
+        shift = jnp.where(k == 0, 0.0, scale * 10.0 ** (k - 1))
+        L = jnp.linalg.cholesky(H + shift * jnp.eye(H.shape[0]))
+        return L, jnp.all(jnp.isfinite(L)), k + 1
 
-    L, _ = lax.while_loop(cond, body, (attempt(0.0), 0))
+    L, _, _ = lax.while_loop(cond, body, (jnp.zeros_like(H), False, 0))
     return L
 
 
