@@ -244,7 +244,8 @@ def plot(rows, path):
         axis.set_xlabel("time per evaluation (s)")
         axis.set_ylabel(label)
         axis.grid(alpha=0.3, which="both")
-        axis.legend(fontsize=8)
+        if axis.lines:
+            axis.legend(fontsize=8)
     axes[0].set_title("model levels against the most exact level")
     axes[1].set_title("default design against the axisymmetric dome")
     figure.tight_layout()

@@ -149,7 +149,7 @@ def test_smooth_saturation_has_finite_gradients_far_beyond_full_scale():
 
 
 # float32: what the README documents, tested as documented.
-FLOAT32_CYLINDER_RTOL = 1e-4
+FLOAT32_CYLINDER_RTOL = 3e-4
 FLOAT32_AXIS_RTOL = 1e-6
 
 
@@ -157,7 +157,10 @@ def test_float32_cylinder_keeps_its_documented_tolerance():
     rng = np.random.default_rng(7)
     directions = rng.normal(size=(4000, 3))
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    points = directions * np.geomspace(1.2, 1e6, 4000)[:, None] * 1.5e-3  # outside the enclosing sphere
+    # outside the enclosing sphere, and densely just inside the multipole switch (about 4.2
+    # radii), where the two faces cancel most before the series takes over
+    distances = np.concatenate([np.geomspace(1.2, 1e6, 2000), np.linspace(3.5, 4.3, 2000)])
+    points = directions * distances[:, None] * 1.5e-3
     exact = np.asarray(cylinder(jnp.asarray(points), radius=1.5e-3, height=1e-3, polarization=1.17))
     single = cylinder(jnp.asarray(points, jnp.float32), radius=1.5e-3, height=1e-3, polarization=1.17)
     assert single.dtype == jnp.float32
