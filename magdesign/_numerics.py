@@ -178,3 +178,8 @@ DOME_MIN_FORCE_FRACTION = 1e-2
 # solve: it only provides the starting state of the force-held solves, which are
 # converged to DOME_NEWTON_TOL; a tighter start costs iterations and changes nothing.
 DOME_START_TOL = 1e-4
+
+# Fraction of a variable's bound width by which the design solver moves a start where the
+# model is flat in every direction (no gradient, so no step): large enough to leave an
+# exactly symmetric point, small enough not to change which optimum is found nearby.
+DESIGN_START_NUDGE = 1e-3

@@ -41,6 +41,7 @@ from magdesign._numerics import (
     DESIGN_DAMPING_START,
     DESIGN_PENALTY,
     DESIGN_RTOL,
+    DESIGN_START_NUDGE,
     safe_div,
 )
 from magdesign.design.problem import Problem
@@ -401,7 +402,15 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
         phase = jnp.select(
             [state.phase == START, state.phase == RESTART, going_on], [FEASIBILITY, FAILED, NEWTON], finish(z)
         )
-        return eqx.tree_at(lambda s: (s.phase, s.z, s.jet), state, (phase, z, jet))
+        moved_on = eqx.tree_at(lambda s: (s.phase, s.z, s.jet, s.count), state, (phase, z, jet, jnp.asarray(0)))
+        # A start where the model is flat in every direction (the centre of a symmetric
+        # design, the bottom of a parabola to be maximised) offers no step at all: move it
+        # once a little into the box, by a different amount per variable, and start again.
+        flat = (state.phase == START) & (state.count == 0) & jnp.all(jet.J == 0.0)
+        inward = jnp.where(z[:n] > 0.5 * y_max, -1.0, 1.0)
+        nudge = inward * DESIGN_START_NUDGE * y_max * (1.0 + jnp.arange(n)) / n
+        restarted = eqx.tree_at(lambda s: (s.z, s.count), state, (z.at[:n].add(nudge), jnp.asarray(1)))
+        return _pick(flat, restarted, moved_on)
 
     def body(state):
         branch = jnp.asarray(_BRANCH_OF_PHASE)[state.phase]
