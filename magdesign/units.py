@@ -163,6 +163,12 @@ def parse(value, unit, *, key):
     return number * factor
 
 
+def written_unit(value):
+    """The unit a spec value is written in ("6.4 mm" -> "mm"); None for a plain number."""
+    match = _NUMBER.match(value) if isinstance(value, str) else None
+    return match.group(2) if match and match.group(2) else None
+
+
 def convert(value_si, unit):
     """Express an SI value in ``unit`` (``convert(6.4e-3, "mm") == 6.4``)."""
     return value_si / unit_factor(unit)

@@ -17,7 +17,6 @@ a one-line :class:`~magdesign.units.SpecError` naming the key.
 """
 
 import importlib.resources
-import re
 import tomllib
 from collections.abc import Mapping
 
@@ -27,12 +26,11 @@ from jaxtyping import Array
 
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable
 from magdesign.scene import AbstractScene, outputs, parameters, scene_from_spec, with_parameters
-from magdesign.units import SpecError, parse
+from magdesign.units import SpecError, parse, written_unit
 
 _VARIABLE_KEYS = ("lower", "upper", "start", "scale")
 _LIMIT_KEYS = ("lower", "upper")
 _SENSES = {"maximize": "max", "minimize": "min"}
-_UNIT_OF = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*(.*?)\s*$")
 
 
 class SceneModel(eqx.Module):
@@ -83,17 +81,11 @@ def _check_keys(where, entry, allowed):
         raise SpecError(f"{where}.{unknown[0]}: unknown key; expected one of {', '.join(allowed)}")
 
 
-def _written_unit(value):
-    """The unit a spec value is written in ("6.4 mm" -> "mm"); None for a plain number."""
-    match = _UNIT_OF.match(value) if isinstance(value, str) else None
-    return match.group(1) if match and match.group(1) else None
-
-
 def _parameter_unit(spec, name):
     """The unit the scene spec writes parameter ``name`` in ("mm"), or "1" for a plain number."""
     table, _, key = name.rpartition(".")
     value = spec.get(table, {}).get(key) if table else spec.get(key)
-    return _written_unit(value) or "1"
+    return written_unit(value) or "1"
 
 
 def problem_from_spec(spec: dict, *, fidelity: str | None = None):
@@ -140,7 +132,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         where = f"design.targets.{name}"
         output_name(where, name)
         value_si = parse(value, output_units.get(name, "1"), key=where)
-        targets.append(Target(name, value_si, unit=_written_unit(value)))
+        targets.append(Target(name, value_si, unit=written_unit(value)))
 
     limits = []
     for name, entry in _table(design, "limits", required=False).items():
@@ -151,7 +143,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
             raise SpecError(f"{where}: expected an upper and/or a lower bound")
         unit = output_units.get(name, "1")
         bounds = {key: parse(entry[key], unit, key=f"{where}.{key}") for key in entry}
-        limits.append(Limit(name, **bounds, unit=_written_unit(next(iter(entry.values())))))
+        limits.append(Limit(name, **bounds, unit=written_unit(next(iter(entry.values())))))
 
     objective = None
     objective_table = _table(design, "objective", required=False)

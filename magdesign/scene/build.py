@@ -13,6 +13,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from magdesign.fields.cylinder import FIDELITIES as CYLINDER_FIDELITIES
+from magdesign.mechanics.dome import BASES as DOME_BASES
+from magdesign.mechanics.dome import FIDELITIES as DOME_FIDELITIES
+from magdesign.mechanics.layer import FIDELITIES as LAYER_FIDELITIES
 from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, time_constant_from_pole
 from magdesign.mechanics.viscoelastic import SEED001_POLE, SEED001_SAMPLE_RATE
 from magdesign.scene import effects as fx
@@ -56,16 +59,16 @@ def _mechanics(spec, fidelity, models=("dome", "layer")):
     table = Table(spec, "mechanics")
     model = table.choice("model", models)
     if model == "dome":
-        levels = ("reissner", "axisymmetric")
+        levels = DOME_FIDELITIES
         mechanics = Dome(
             outer_radius=jnp.asarray(table.quantity("outer_radius", "m")),
             thickness=jnp.asarray(table.quantity("thickness", "m")),
             material=_material(table),
             fidelity=table.choice("fidelity", levels, default="reissner"),
-            base=table.choice("base", ("bonded", "sliding"), default="bonded"),
+            base=table.choice("base", DOME_BASES, default="bonded"),
         )
     else:
-        levels = ("hooke", "bonded")
+        levels = LAYER_FIDELITIES
         mechanics = Layer(
             thickness=jnp.asarray(table.quantity("thickness", "m")),
             contact_area=jnp.asarray(table.quantity("contact_area", "m^2")),
