@@ -140,3 +140,14 @@ def test_grad_with_respect_to_constants_is_finite_and_right():
 def test_bad_constants_raise_naming_the_argument(make, name):
     with pytest.raises(ValueError, match=rf"\b{name}\b"):
         make()
+
+
+@pytest.mark.parametrize("gamma", [1e-7, 1e-4, 0.3])
+def test_energy_keeps_full_precision_at_tiny_strains(gamma):
+    """Simple shear is isochoric with Ibar1 - 3 = Ibar2 - 3 = gamma^2 exactly: the energy
+    c10 gamma^2 + c01 gamma^2 must keep its digits where Ibar1 - 3 formed from I1 would
+    lose them (relative error 1e-16 / gamma^2, 1e-2 at gamma = 1e-7)."""
+    material = MooneyRivlin(c10=0.1182e6, c01=0.1769e6, bulk=1e9)
+    F = jnp.eye(3).at[0, 1].set(gamma)
+    expected = (0.1182e6 + 0.1769e6) * gamma**2
+    assert float(material.strain_energy(F)) == pytest.approx(expected, rel=1e-9)
