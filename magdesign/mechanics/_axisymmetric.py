@@ -3,17 +3,21 @@
 Geometry and mesh. The wall (radii R_o - t .. R_o, apex on the axis, base rim on z = 0) is
 meshed in the meridian section with 9-node quadratic quadrilaterals on a polar grid:
 ``n_wall`` elements through the wall (radius rho) and ``n_meridian`` along the meridian
-(polar angle phi from 0 at the apex to pi / 2 at the base), nodes on arcs. Node (i, j)
-sits at phi_i, rho_j; its unknowns are the displacements (u_r, u_z) (m).
+(polar angle phi from 0 at the apex to pi / 2 at the base), nodes on arcs. Element
+boundaries sit at phi = (pi / 2) s^g, s = 0, 1/n, .., 1, with the grading exponent g:
+small elements at the apex, where a light load bends the wall over a short length
+~ sqrt(R t). Node (i, j) sits at phi_i, rho_j; its unknowns are the displacements (u_r, u_z) (m).
 
 Kinematics. F = [[dr/dR, dr/dZ, 0], [dz/dR, dz/dZ, 0], [0, 0, (R + u_r) / R]] in
-(r, z, theta) order, evaluated at 3 x 3 Gauss points, which never lie on the axis. The
+(r, z, theta) order, evaluated at 3 x 3 Gauss points, which never lie on the axis. Its five
+non-zero entries are affine in the element's 18 nodal displacements: F5 = F_rest + H5,
+H5 = B u. The energy is formed from H5 without cancellation (materials.excess_invariants). The
 nodes of the apex row lie on the axis: their u_r is held at 0 (symmetry).
 
 Volumetric locking. The energy is split as W(F) = W(J^(-1/3) F) + W(J^(1/3) I) (exact for
 the decoupled laws of :mod:`materials`: isochoric part plus U(J)). The isochoric part is
-integrated at the 3 x 3 points; the volumetric part uses Jbar, the L2 projection (over the
-element's ring volume) of J onto the linear fields {1, xi, eta} of the element: the
+integrated at the 3 x 3 points; the volumetric part uses Jbar = A J, the L2 projection (over
+the element's ring volume) of J onto the linear fields {1, xi, eta} of the element: the
 energy form of the Q9/P3 mixed element (discontinuous linear pressure, inf-sup stable),
 without spurious pressure or hourglass modes.
 
@@ -21,21 +25,30 @@ Contact. A rigid frictionless plate at z = R_o - d (d the plate travel, m) and t
 surface: penalty energy (kappa / 2) ramp(g)^2 per reference area of the outer surface at
 3 Gauss points per element edge, g = z + u_z - (R_o - d) the penetration, ramp a softplus
 smoothed max(g, 0) (so that design derivatives are continuous), kappa = CONTACT_PENALTY
-mu / t.
+mu / t. The plate force is the reaction dPi / dd.
 
-Solution. Pi(U, d) = elastic + contact energy, minimised over the free displacements by
-Newton's method with the exact tangent (element Hessians by ``jax.hessian``, assembled
-into a dense matrix: a few hundred unknowns), a Levenberg shift where that matrix is not
-positive definite and a backtracking line search on Pi, inside ``lax.while_loop``. A load
-path in plate travel (displacement control, warm starts, secant predictor) is followed by
-a force-controlled solve (d an unknown, Pi - F d minimised), whose result is differentiated
-implicitly (a custom JVP solving with the same tangent), so derivatives with respect to
-geometry, material and force are exact whatever the iterations did, in forward and
-reverse mode and to any order.
+Tangent. The Hessian of the energy is assembled from exact element Hessians
+B^T (d^2 E / dF5^2) B: per Gauss point a 5 x 5 block (isochoric energy and the curvature of
+J), plus the rank-3 coupling of the projected Jbar; JAX differentiates only the
+five-argument densities. This is the Hessian of :func:`potential` to rounding (tested
+against ``jax.hessian``) at a tenth of the cost of differentiating the element energy.
+
+Solution. Newton's method on the total potential with the exact tangent, dense Cholesky
+(a few hundred unknowns), a Levenberg shift only where the tangent is not positive
+definite, and a backtracking line search on the potential; converged when the largest
+out-of-balance force is below DOME_RESIDUAL_TOL mu t^2. Two controls: the plate travel
+held (the natural control: it passes limit points where the force falls) or the force held
+(d an unknown, Pi - F d minimised). The path followers (:func:`follow_travels`,
+:func:`first_crossings`) step the plate travel adaptively from the undeformed dome with a
+secant predictor. Their equilibria are differentiated implicitly (:func:`implicit`: a custom
+JVP solving with the same tangent), so derivatives with respect to geometry, material,
+travel and force are exact whatever the iterations did, in forward and reverse mode and to
+any order.
 """
 
 import functools
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -45,23 +58,41 @@ from magdesign._numerics import (
     CONTACT_SMOOTHING,
     DOME_LEVENBERG_START,
     DOME_LINE_SEARCH_SLACK,
-    DOME_NEWTON_TOL,
-    safe_div,
+    DOME_RESIDUAL_TOL,
     smooth_ramp,
 )
+from magdesign.mechanics.materials import excess_invariants
 
-# Penalty stiffness of the contact, kappa t / mu. The penetration it leaves is about
-# p t / (CONTACT_PENALTY mu), p ~ 0.3 mu the contact pressure of a dome: 0.03 % of the wall,
-# less than 0.01 % of the plate travel; stiffer penalties only slow Newton down.
+# Penalty stiffness of the contact, kappa t / mu: the penetration it leaves is a 1/1000 of
+# the wall's own compression p t / E under the contact pressure p, a small part of the
+# plate travel itself (measured below 1e-4 of it, see tests/mechanics/test_dome.py);
+# stiffer penalties only slow Newton down.
 CONTACT_PENALTY = 1000.0
-# Newton iterations per solve at most (a solve that hits it reports converged = False).
-NEWTON_MAX_ITER = 60
+# Grading exponent of the meridian mesh (element boundaries at (pi / 2) s^GRADING).
+GRADING = 2.0
+# Newton iterations of one solve at most: a force-held solve or a path's first step, and
+# any later step of a path (a step that needs more is retried at a quarter of its length).
+NEWTON_MAX_ITER = 40
+PATH_NEWTON_MAX_ITER = 20
 # Halvings of the step of one line search at most, and the Armijo fraction of the
 # predicted decrease that a step must achieve.
 LINE_SEARCH_MAX = 30
 ARMIJO = 0.25
 # Levenberg shifts tried per iteration at most (each ten times the previous one).
 LEVENBERG_MAX = 12
+# Path following: steps at most, and the Newton iterations below which a step doubles and
+# above which it halves.
+PATH_MAX_STEPS = 80
+PATH_EASY_ITER = 8
+PATH_HARD_ITER = 16
+# A failed step is retried at a quarter of its length until it is shorter than this
+# fraction of the wall: then the path has met a snap (the equilibrium with the travel held
+# ceases to exist, as where the apex of a thin dome inverts and leaves the plate), and the
+# next step jumps: Newton descends the potential from the last state, with up to
+# SNAP_MAX_ITER iterations, to the equilibrium the dome snaps to at a travel this much
+# further. A failed jump ends the path.
+SNAP_STEP = 1e-2
+SNAP_MAX_ITER = 60
 
 _GAUSS3 = np.polynomial.legendre.leggauss(3)
 
@@ -105,10 +136,11 @@ class Mesh:
     plate travel d (m).
     """
 
-    def __init__(self, n_wall: int, n_meridian: int, base: str):
+    def __init__(self, n_wall: int, n_meridian: int, base: str, grading: float = GRADING):
         self.n_wall, self.n_meridian = n_wall, n_meridian
         self.rows, self.cols = 2 * n_meridian + 1, 2 * n_wall + 1
         self.n_dof = 2 * self.rows * self.cols
+        self.size = self.n_dof + 1
         node = np.arange(self.rows * self.cols).reshape(self.rows, self.cols)
         a, b = np.arange(n_meridian), np.arange(n_wall)
         rows = 2 * a[:, None, None, None] + np.arange(3)[:, None]  # (n_mer, 1, 3, 1)
@@ -116,15 +148,20 @@ class Mesh:
         elem_nodes = node[rows, cols].reshape(n_meridian * n_wall, 9)
         self.elem_nodes = elem_nodes  # (n_elem, 9), local node (a, b) at 3 a + b
         self.elem_dofs = (2 * elem_nodes[:, :, None] + np.arange(2)).reshape(-1, 18)
-        self.edge_rows = 2 * a[:, None] + np.arange(3)  # (n_mer, 3) rows of outer edges
-        self.edge_nodes = node[:, -1][self.edge_rows]  # (n_mer, 3)
-        self.outer_z_dofs = 2 * node[:, -1] + 1  # (rows,)
+        self.edge_nodes = node[:, -1][2 * a[:, None] + np.arange(3)]  # (n_mer, 3) outer edges
+        # each edge's unknowns: the u_z of its three nodes, then the plate travel
+        self.edge_dofs = np.concatenate([2 * self.edge_nodes + 1, np.full((n_meridian, 1), self.n_dof)], axis=1)
         free = np.ones((self.rows, self.cols, 2))
         free[0, :, 0] = 0.0  # apex row, on the axis: u_r = 0 by symmetry
         free[-1, :, 1] = 0.0  # base rim on z = 0
         if base == "bonded":
             free[-1, :, 0] = 0.0
         self.free_u = free.ravel()
+        corners = (np.pi / 2) * (np.arange(n_meridian + 1) / n_meridian) ** grading
+        phi = np.empty(self.rows)
+        phi[0::2] = corners
+        phi[1::2] = 0.5 * (corners[:-1] + corners[1:])  # mid-nodes halfway along each arc
+        self.phi = phi
 
     def mask(self, force_control: bool) -> np.ndarray:
         """1 for the unknowns of a solve, 0 for held values: (n_dof + 1,)."""
@@ -133,39 +170,51 @@ class Mesh:
     def reference(self, outer_radius, thickness):
         """Reference nodal coordinates (rows cols, 2): (R, Z) in m."""
         rho = outer_radius - thickness + thickness * np.arange(self.cols) / (self.cols - 1)
-        phi = np.arange(self.rows) * (np.pi / 2) / (self.rows - 1)
-        X = jnp.stack([rho[None, :] * np.sin(phi)[:, None], rho[None, :] * np.cos(phi)[:, None]], -1)
+        X = jnp.stack([rho[None, :] * np.sin(self.phi)[:, None], rho[None, :] * np.cos(self.phi)[:, None]], -1)
         return X.reshape(-1, 2)
 
 
-def _element_energy(X, u, material):
-    """Elastic energy (J) of one element's ring: X, u (9, 2) nodal (R, Z) and (u_r, u_z)."""
+def _excess(H5):
+    """(Ibar1 - 3, Ibar2 - 3, J - 1) of the axisymmetric displacement gradient H5 = F5 - F_rest."""
+    a, b, c, e, h = H5
+    return excess_invariants([[a, b, 0.0], [c, e, 0.0], [0.0, 0.0, h]])
+
+
+def _densities(material):
+    """(isochoric density of H5, volumetric density of j = J - 1) (J/m^3) of a decoupled
+    law: W(J^(-1/3) F) and W(J^(1/3) I)."""
+
+    def isochoric(H5):
+        i1, i2, _ = _excess(H5)
+        return material.invariant_energy(i1, i2, 0.0)
+
+    def volumetric(j):
+        return material.invariant_energy(0.0, 0.0, j)
+
+    return isochoric, volumetric
+
+
+def _volume_change(H5):
+    return _excess(H5)[2]
+
+
+def _kinematics(X):
+    """B (9 points, 5, 18), ring volumes (9,) (m^3) and the volumetric projection A (9, 9)
+    (Jbar = A J) of one element with reference nodal coordinates X (9, 2) (m)."""
     jac = jnp.einsum("gkn,nc->gck", _DN, X)  # d X_c / d xi_k, (9, 2, 2)
     det = jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]
     inv = jnp.stack([jnp.stack([jac[:, 1, 1], -jac[:, 0, 1]], -1), jnp.stack([-jac[:, 1, 0], jac[:, 0, 0]], -1)], -2)
     inv = inv / det[:, None, None]  # d xi_k / d X_c, (9, 2, 2)
-    grad = jnp.einsum("gkn,nc,gkd->gcd", _DN, u, inv)  # d u_c / d X_d
-    R, ur = _N @ X[:, 0], _N @ u[:, 0]
-    zero = jnp.zeros_like(R)
-    F = jnp.stack(
-        [
-            jnp.stack([1 + grad[:, 0, 0], grad[:, 0, 1], zero], -1),
-            jnp.stack([grad[:, 1, 0], 1 + grad[:, 1, 1], zero], -1),
-            jnp.stack([zero, zero, 1 + ur / R], -1),
-        ],
-        -2,
-    )
-    J = (F[:, 0, 0] * F[:, 1, 1] - F[:, 0, 1] * F[:, 1, 0]) * F[:, 2, 2]
-    volume = 2 * jnp.pi * R * det * _W  # reference ring volume of each point (m^3)
-    # Jbar: L2 projection of J onto {1, xi, eta} over the element (Q9/P3)
-    mass = _P.T @ (volume[:, None] * _P)
-    J_bar = _P @ (_inverse3(mass) @ (_P.T @ (volume * J)))
-    # isochoric part W(J^-1/3 F) and volumetric part W(Jbar^1/3 I) in one call
-    stretched = jnp.concatenate(
-        [jnp.cbrt(1 / J)[:, None, None] * F, jnp.cbrt(J_bar)[:, None, None] * jnp.eye(3)]
-    )
-    densities = jax.vmap(material.strain_energy)(stretched)
-    return jnp.sum(jnp.concatenate([volume, volume]) * densities)
+    dN = jnp.einsum("gkn,gkd->gnd", _DN, inv)  # d N_n / d X_d, (9, 9, 2)
+    R = _N @ X[:, 0]
+    zero = jnp.zeros_like(dN[..., 0])
+    on_ur = jnp.stack([dN[..., 0], dN[..., 1], zero, zero, _N / R[:, None]], axis=1)  # (9, 5, 9)
+    on_uz = jnp.stack([zero, zero, dN[..., 0], dN[..., 1], zero], axis=1)
+    B = jnp.stack([on_ur, on_uz], axis=-1).reshape(9, 5, 18)
+    volume = 2 * jnp.pi * R * det * _W
+    weighted = volume[:, None] * _P
+    A = _P @ _inverse3(_P.T @ weighted) @ weighted.T
+    return B, volume, A
 
 
 def _inverse3(M):
@@ -174,96 +223,142 @@ def _inverse3(M):
     return adjugate_T.T / jnp.dot(M[0], adjugate_T[0])
 
 
-def _contact_energy(X_edge, z_edge, d, outer_radius, thickness, material):
+def _element_energy(X, u, material):
+    """Elastic energy (J) of one element's ring: X (9, 2) nodal (R, Z), u (18,) displacements."""
+    B, volume, A = _kinematics(X)
+    H5 = B @ u
+    isochoric, volumetric = _densities(material)
+    j_bar = A @ jax.vmap(_volume_change)(H5)  # A reproduces constants: Jbar - 1 = A (J - 1)
+    return jnp.dot(volume, jax.vmap(isochoric)(H5) + jax.vmap(volumetric)(j_bar))
+
+
+def _element_derivatives(X, u, material):
+    """Gradient (18,) and Hessian (18, 18) of :func:`_element_energy` in u, assembled from
+    the derivatives of the densities in F5 (see the module docstring)."""
+    B, volume, A = _kinematics(X)
+    H5 = B @ u
+    isochoric, volumetric = _densities(material)
+    J, dJ, d2J = jax.vmap(lambda h: (_volume_change(h), jax.grad(_volume_change)(h), jax.hessian(_volume_change)(h)))(H5)
+    g_iso = jax.vmap(jax.grad(isochoric))(H5)
+    h_iso = jax.vmap(jax.hessian(isochoric))(H5)
+    J_bar = A @ J
+    U1 = jax.vmap(jax.grad(volumetric))(J_bar)
+    U2 = jax.vmap(jax.grad(jax.grad(volumetric)))(J_bar)
+    dE_dJ = A.T @ (volume * U1)
+    d2E_dJ2 = A.T @ ((volume * U2)[:, None] * A)
+    G = volume[:, None] * g_iso + dE_dJ[:, None] * dJ  # dE / dF5, (9, 5)
+    D = volume[:, None, None] * h_iso + dE_dJ[:, None, None] * d2J  # its point-wise blocks
+    L = jnp.einsum("gi,gij->gj", dJ, B)  # dJ / du, (9, 18)
+    gradient = jnp.einsum("gi,gij->j", G, B)
+    hessian = jnp.einsum("gij,gik,gkl->jl", B, D, B) + L.T @ d2E_dJ2 @ L
+    return gradient, hessian
+
+
+def _penalty(params):
+    """Contact penalty stiffness kappa (Pa/m): CONTACT_PENALTY mu / t."""
+    _, thickness, material = params
+    return CONTACT_PENALTY * material.shear_modulus / thickness
+
+
+def _edge_energy(X_edge, z_and_d, outer_radius, kappa, width):
     """Penalty energy (J) of one outer edge: X_edge (3, 2) reference (R, Z) of its nodes,
-    z_edge (3,) their current heights (m), plate travel d (m)."""
+    z_and_d (4,) their u_z (m) and the plate travel d (m)."""
     R = _EDGE_N @ X_edge[:, 0]
     ds = jnp.linalg.norm(_EDGE_DN @ X_edge, axis=-1)
-    penetration = _EDGE_N @ z_edge - (outer_radius - d)
-    kappa = CONTACT_PENALTY * material.shear_modulus / thickness
-    ramp = smooth_ramp(penetration, CONTACT_SMOOTHING * thickness)
+    penetration = _EDGE_N @ (X_edge[:, 1] + z_and_d[:3]) - (outer_radius - z_and_d[3])
+    ramp = smooth_ramp(penetration, width)
     return jnp.sum(_EDGE_W * ds * 2 * jnp.pi * R * kappa / 2 * ramp**2)
 
 
-def _parts(mesh, params):
-    outer_radius, thickness = params[0], params[1]
+def _parts(mesh, params, y):
+    """Per-element (X (9, 2), u (18,)) and per-edge (X (3, 2), (u_z, d) (4,)) arrays."""
+    outer_radius, thickness, _ = params
     X = mesh.reference(outer_radius, thickness)
-    return X[mesh.elem_nodes], X[mesh.edge_nodes]
+    u = y[:-1] * mesh.free_u
+    full = jnp.append(u, y[-1])
+    return X[mesh.elem_nodes], full[mesh.elem_dofs], X[mesh.edge_nodes], full[mesh.edge_dofs]
 
 
-def potential(mesh, y, params):
-    """Total potential (J) of state y: elastic + contact energy - F d.
+def _contact_args(mesh, params):
+    outer_radius, thickness, _ = params
+    return outer_radius, _penalty(params), CONTACT_SMOOTHING * thickness
 
-    params = (outer_radius (m), thickness (m), material, force F (N)).
+
+def potential(mesh, y, params, force=0.0):
+    """Total potential (J) of state y: elastic + contact energy - force d.
+
+    params = (outer_radius (m), thickness (m), material); force (N).
     """
-    outer_radius, thickness, material, force = params
-    X_elem, X_edge = _parts(mesh, params)
-    u = (y[:-1] * mesh.free_u).reshape(-1, 2)
-    elastic = jax.vmap(_element_energy, (0, 0, None))(X_elem, u[mesh.elem_nodes], material)
-    z_edge = X_edge[..., 1] + u[mesh.edge_nodes, 1]
-    contact = jax.vmap(_contact_energy, (0, 0, None, None, None, None))(
-        X_edge, z_edge, y[-1], outer_radius, thickness, material
-    )
+    X_elem, u_elem, X_edge, z_edge = _parts(mesh, params, y)
+    elastic = jax.vmap(_element_energy, (0, 0, None))(X_elem, u_elem, params[2])
+    contact = jax.vmap(_edge_energy, (0, 0) + (None,) * 3)(X_edge, z_edge, *_contact_args(mesh, params))
     return jnp.sum(elastic) + jnp.sum(contact) - force * y[-1]
 
 
-def residual(mesh, mask, y, held, params):
-    """dPi/dy on the unknowns (mask 1); y - held on the held values (mask 0)."""
-    return mask * jax.grad(potential, argnums=1)(mesh, y, params) + (1 - mask) * (y - held)
+def derivatives(mesh, y, params):
+    """Gradient (size,) and Hessian (size, size) of :func:`potential` (force 0) in y.
+
+    The last gradient entry, dPi / dd, is the plate force (N)."""
+    X_elem, u_elem, X_edge, z_edge = _parts(mesh, params, y)
+    g_elem, H_elem = jax.vmap(_element_derivatives, (0, 0, None))(X_elem, u_elem, params[2])
+    contact = (X_edge, z_edge) + _contact_args(mesh, params)
+    in_axes = (0, 0) + (None,) * 3
+    g_edge = jax.vmap(jax.grad(_edge_energy, argnums=1), in_axes)(*contact)
+    H_edge = jax.vmap(jax.hessian(_edge_energy, argnums=1), in_axes)(*contact)
+    dofs, edges = mesh.elem_dofs, mesh.edge_dofs
+    g = jnp.zeros(mesh.size).at[dofs].add(g_elem).at[edges].add(g_edge)
+    H = jnp.zeros((mesh.size, mesh.size)).at[dofs[:, :, None], dofs[:, None, :]].add(H_elem)
+    H = H.at[edges[:, :, None], edges[:, None, :]].add(H_edge)
+    free = np.append(mesh.free_u, 1.0)  # fixed displacements enter the energy as 0
+    return free * g, free[:, None] * H * free[None, :]
 
 
-def _project_psd(H):
-    """The nearest positive semi-definite matrix to the symmetric H (its negative
-    eigenvalues set to 0)."""
-    values, vectors = jnp.linalg.eigh(H)
-    return (vectors * jnp.maximum(values, 0.0)[..., None, :]) @ jnp.swapaxes(vectors, -1, -2)
+def plate_force(mesh, y, params):
+    """The plate force (N) at state y: the reaction dPi / dd."""
+    return jax.grad(lambda d: potential(mesh, y.at[-1].set(d), params))(y[-1])
 
 
-def tangent(mesh, mask, y, params, project=False):
-    """d residual / dy (n_dof + 1, n_dof + 1): the Hessian of Pi on the unknowns,
-    identity on the held values; assembled from element and edge Hessians."""
-    outer_radius, thickness, material, _ = params
-    X_elem, X_edge = _parts(mesh, params)
-    u = (y[:-1] * mesh.free_u).reshape(-1, 2)
-    H_elem = jax.vmap(jax.hessian(_element_energy, argnums=1), (0, 0, None))(
-        X_elem, u[mesh.elem_nodes], material
-    ).reshape(-1, 18, 18)
-    if project:
-        H_elem = _project_psd(H_elem)
+def contact_radius(mesh, y, params):
+    """Largest current radius (m) of an outer-surface Gauss point pressed into the plate
+    (0 if none): where the contact ends. Not differentiable (held constant)."""
+    y, params = lax.stop_gradient((y, params))
+    _, _, X_edge, z_edge = _parts(mesh, params, y)
+    u_r = (y[:-1] * mesh.free_u).reshape(-1, 2)[mesh.edge_nodes, 0]
+    r = (X_edge[..., 0] + u_r) @ _EDGE_N.T  # (edges, 3 points)
+    z = (X_edge[..., 1] + z_edge[:, :3]) @ _EDGE_N.T
+    touching = z > params[0] - y[-1]
+    return jnp.max(jnp.where(touching, r, 0.0))
 
-    def contact(z_and_d):
-        z_edge = X_edge[..., 1] + z_and_d[:-1][mesh.edge_rows]
-        energies = jax.vmap(_contact_energy, (0, 0, None, None, None, None))(
-            X_edge, z_edge, z_and_d[-1], outer_radius, thickness, material
-        )
-        return jnp.sum(energies)
 
-    H_contact = jax.hessian(contact)(jnp.append(u[:, 1].reshape(mesh.rows, mesh.cols)[:, -1], y[-1]))
-    dofs = mesh.elem_dofs
-    contact_dofs = np.append(mesh.outer_z_dofs, mesh.n_dof)
-    n = mesh.n_dof + 1
-    H = jnp.zeros((n, n)).at[dofs[:, :, None], dofs[:, None, :]].add(H_elem)
-    H = H.at[contact_dofs[:, None], contact_dofs[None, :]].add(H_contact)
-    return mask[:, None] * H * mask[None, :] + jnp.diag(1 - mask)
+def residual(mesh, mask, held, force, y, params):
+    """dPi/dy - force e_d on the unknowns (mask 1); y - held on the held values (mask 0)."""
+    gradient = jax.grad(potential, argnums=1)(mesh, y, params)
+    return mask * (gradient - force * _unit_last(mesh)) + (1 - mask) * (y - held)
+
+
+def _unit_last(mesh):
+    return np.append(np.zeros(mesh.n_dof), 1.0)
 
 
 def _factor(H):
     """Cholesky factor of H + lambda I with the smallest tried shift lambda >= 0 that
     makes it positive definite (lambda = 0 first, then DOME_LEVENBERG_START times the
-    largest diagonal entry, growing tenfold)."""
+    largest diagonal entry, growing tenfold; the loop runs only where H itself fails)."""
     scale = DOME_LEVENBERG_START * jnp.max(jnp.abs(jnp.diag(H)))
 
+    def shifted(k):
+        return jnp.linalg.cholesky(H + scale * 10.0 ** (k - 1) * jnp.eye(H.shape[0]))
+
     def cond(carry):
-        _, ok, k = carry
-        return ~ok & (k < LEVENBERG_MAX)
+        L, k = carry
+        return ~jnp.all(jnp.isfinite(L)) & (k <= LEVENBERG_MAX)
 
-    def body(carry):
-        _, _, k = carry
-        shift = jnp.where(k == 0, 0.0, scale * 10.0 ** (k - 1))
-        L = jnp.linalg.cholesky(H + shift * jnp.eye(H.shape[0]))
-        return L, jnp.all(jnp.isfinite(L)), k + 1
-
-    L, _, _ = lax.while_loop(cond, body, (jnp.zeros_like(H), False, 0))
+    L = jnp.linalg.cholesky(H)
+    L, _ = lax.cond(
+        jnp.all(jnp.isfinite(L)),
+        lambda: (L, 1),
+        lambda: lax.while_loop(cond, lambda c: (shifted(c[1]), c[1] + 1), (shifted(1), 2)),
+    )
     return L
 
 
@@ -271,26 +366,36 @@ def _cho_solve(L, b):
     return jax.scipy.linalg.cho_solve((L, True), b)
 
 
-def _newton(mesh, mask, params, y0, held, tol=DOME_NEWTON_TOL):
-    """Minimise Pi over the unknowns (mask 1) from y0, the others held at ``held``:
-    (state, converged, iterations). Converged: the last Newton step was below
-    ``tol`` t (default DOME_NEWTON_TOL)."""
-    tol = tol * params[1]
+def _tolerance(params):
+    """Largest out-of-balance force (N) of a converged state: DOME_RESIDUAL_TOL mu t^2."""
+    return DOME_RESIDUAL_TOL * params[2].shear_modulus * params[1] ** 2
+
+
+def newton(mesh, mask, held, force, params, y0, max_iter):
+    """Minimise Pi - force d over the unknowns (mask 1) from y0, the others held at
+    ``held``: (state, converged, iterations). Converged: the largest entry of the
+    residual (an out-of-balance force, N) is at most :func:`_tolerance`."""
+    tol = _tolerance(params)
     y0 = mask * y0 + (1 - mask) * held
+    unit = _unit_last(mesh)
 
     def energy(y):
-        value = potential(mesh, y, params)
+        value = potential(mesh, y, params, force)
         return jnp.where(jnp.isfinite(value), value, jnp.inf)
 
+    def linearise(y):
+        g, H = derivatives(mesh, y, params)
+        g = mask * (g - force * unit)
+        H = mask[:, None] * H * mask[None, :] + jnp.diag(1 - mask)
+        return g, H, jnp.max(jnp.abs(g))
+
     def cond(carry):
-        _, it, step = carry
-        return (it < NEWTON_MAX_ITER) & (step > tol)
+        _, _, _, size, it, stalled = carry
+        return (it < max_iter) & (size > tol) & ~stalled
 
     def body(carry):
-        y, it, _ = carry
-        g = residual(mesh, mask, y, held, params)
-        L = _factor(tangent(mesh, mask, y, params))
-        dy = _cho_solve(L, g)
+        y, g, H, _, it, _ = carry
+        dy = _cho_solve(_factor(H), g)
         pi0, slope = energy(y), jnp.dot(g, dy)
         slack = DOME_LINE_SEARCH_SLACK * jnp.abs(pi0)
 
@@ -299,65 +404,210 @@ def _newton(mesh, mask, params, y0, held, tol=DOME_NEWTON_TOL):
             return (trial > pi0 - ARMIJO * alpha * slope + slack) & (alpha > 2.0**-LINE_SEARCH_MAX)
 
         alpha = lax.while_loop(search_cond, lambda a: a / 2, 1.0)
-        step = alpha * jnp.max(jnp.abs(dy))
-        return y - alpha * dy, it + 1, step
+        y = y - alpha * dy
+        g, H, size = linearise(y)
+        return y, g, H, size, it + 1, alpha <= 2.0**-LINE_SEARCH_MAX
 
-    y, iterations, step = lax.while_loop(cond, body, (y0, 0, jnp.inf))
-    return y, step <= tol, iterations
-
-
-def _solve_stages(mesh, params, forces, start_travel, start_tol):
-    """States (n, n_dof + 1), converged flags and Newton iteration counts (n,) under each
-    of ``forces`` (n,) (N) in turn. Stage 0 holds the plate at ``start_travel`` (m) from
-    the undeformed dome (to tolerance ``start_tol``), establishing contact; then each
-    force is held in turn, warm-started from the previous state. One compiled Newton
-    iteration serves all stages (mask, held values and tolerance are data)."""
-    n, size = forces.shape[0], mesh.n_dof + 1
-    masks = np.stack([mesh.mask(False)] + [mesh.mask(True)] * n)
-    tols = jnp.concatenate([jnp.asarray(start_tol, float)[None], jnp.full(n, DOME_NEWTON_TOL)])
-    stage_forces = jnp.concatenate([jnp.zeros(1), forces])
-    helds = jnp.zeros((n + 1, size)).at[0, -1].set(start_travel)
-
-    def stage(y, inputs):
-        mask, tol, force, held = inputs
-        y, converged, iterations = _newton(mesh, mask, params + (force,), y, held, tol)
-        return y, (y, converged, iterations)
-
-    _, (states, converged, iterations) = lax.scan(stage, jnp.zeros(size), (masks, tols, stage_forces, helds))
-    return states[1:], converged[1:], iterations
+    g, H, size = linearise(y0)
+    y, _, _, size, iterations, _ = lax.while_loop(cond, body, (y0, g, H, size, 0, False))
+    return y, size <= tol, iterations
 
 
-@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 4))
-def equilibria(mesh, params, forces, start_travel, start_tol):
-    """The equilibria under each of ``forces`` (n,) (N), plate travel free, with implicit
-    derivatives with respect to params = (outer_radius (m), thickness (m), material) and
-    the forces. Returns (states (n, n_dof + 1), converged (n,) bool).
-
-    ``start_travel`` (m) and ``start_tol`` only set where Newton starts (see
-    :func:`_solve_stages`); the equilibria, hence the derivatives, do not depend on them.
-    """
-    return _solve_stages(mesh, params, forces, start_travel, start_tol)[:2]
+def _control(mesh, force_control, value):
+    """(mask, held state, force) of a solve with the force (``force_control``, a bool that
+    may be traced) or the travel held at ``value`` (N or m)."""
+    mask = jnp.where(force_control, mesh.mask(True), mesh.mask(False))
+    held = jnp.zeros(mesh.size).at[-1].set(jnp.where(force_control, 0.0, value))
+    return mask, held, jnp.where(force_control, value, 0.0)
 
 
-@equilibria.defjvp
-def _equilibria_jvp(mesh, start_tol, primals, tangents):
-    params, forces, start_travel = primals
-    params_dot, forces_dot, _ = tangents
-    states, converged = equilibria(mesh, params, forces, start_travel, start_tol)
-    mask = mesh.mask(True)
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1))
+def implicit(mesh, control, params, values, states):
+    """``states`` (n, size), unchanged: equilibria with the plate travel (``control``
+    "travel", ``values`` (n,) in m) or the plate force ("force", N) held at ``values``,
+    found by any solver. Its derivatives are those of the equilibria with respect to
+    params = (outer_radius (m), thickness (m), material) and the values, from the implicit
+    function theorem (a linear solve with the tangent), whatever the solver did."""
+    return states
 
-    def state_tangent(y, force, force_dot):
-        held = jnp.zeros_like(y)
-        _, r_dot = jax.jvp(
-            lambda p, f: residual(mesh, mask, y, held, p + (f,)), (params, force), (params_dot, force_dot)
-        )
-        full = params + (force,)
-        L = _factor(tangent(mesh, mask, y, full))
+
+@implicit.defjvp
+def _implicit_jvp(mesh, control, primals, tangents):
+    params, values, states = primals
+    params_dot, values_dot, _ = tangents
+    force_control = control == "force"
+    # through the primal again, so that a derivative of this rule (second order) sees the
+    # states move with params and values
+    states = implicit(mesh, control, params, values, states)
+
+    def state_tangent(y, value, value_dot):
+        def r(p, v):
+            return residual(mesh, *_control(mesh, force_control, v), y, p)
+
+        _, r_dot = jax.jvp(r, (params, value), (params_dot, value_dot))
+        mask = _control(mesh, force_control, value)[0]
+        _, H = derivatives(mesh, y, params)
+        L = _factor(mask[:, None] * H * mask[None, :] + jnp.diag(1 - mask))
+
+        def hessian_times(v):
+            return H @ v
+
+        # held values move with their hold (r = y - held there); the unknowns follow from
+        # the symmetric system of their own rows
+        held_dot = (1 - mask) * -r_dot
+        b = -mask * (r_dot + hessian_times(held_dot))
 
         def matvec(v):
-            return jax.jvp(lambda z: residual(mesh, mask, z, held, full), (y,), (v,))[1]
+            return mask * hessian_times(mask * v) + (1 - mask) * v
 
-        return lax.custom_linear_solve(matvec, -r_dot, lambda _, b: _cho_solve(L, b), symmetric=True)
+        free_dot = lax.custom_linear_solve(matvec, b, lambda _, c: _cho_solve(L, c), symmetric=True)
+        return free_dot + held_dot
 
-    states_dot = jax.vmap(state_tangent)(states, forces, forces_dot)
-    return (states, converged), (states_dot, np.zeros(converged.shape, dtype=jax.dtypes.float0))
+    return states, jax.vmap(state_tangent)(states, values, values_dot)
+
+
+class Path(eqx.Module):
+    """A point of a followed force-travel path: the state y (size,) at travel y[-1] (m),
+    its plate force (N), the state before it (for the secant predictor), the next travel
+    step (m), and the count of steps tried. ``failed``: a snap's jump did not converge."""
+
+    y: jax.Array
+    force: jax.Array
+    previous: jax.Array
+    step: jax.Array
+    count: jax.Array
+    failed: jax.Array
+
+    def can_go_on(self, max_travel):
+        return ~self.failed & (self.count < PATH_MAX_STEPS) & (self.y[-1] < max_travel)
+
+
+def _start_path(mesh, step):
+    """The undeformed dome as the start of a path, with first travel step ``step`` (m)."""
+    zero = jnp.zeros(mesh.size)
+    return Path(zero, jnp.zeros(()), zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False))
+
+
+def _path_guess(path, goal, thickness):
+    """(guess state, its travel, Newton iterations allowed, jump) of the next step towards
+    the travel ``goal``: the secant prediction at min(d + step, goal). The first step, from
+    the undeformed dome with the plate pressed in (no secant yet), may take a full solve's
+    iterations; a jump (see SNAP_STEP) starts from the last state."""
+    y = path.y
+    d = y[-1]
+    jump = path.step < SNAP_STEP * thickness
+    d_new = jnp.minimum(d + jnp.maximum(path.step, SNAP_STEP * thickness), goal)
+    last = d - path.previous[-1]
+    ratio = jnp.where((last > 0) & ~jump, (d_new - d) / jnp.where(last > 0, last, 1.0), 0.0)
+    guess = (y + ratio * (y - path.previous)).at[-1].set(d_new)
+    max_iter = jnp.where(jump, SNAP_MAX_ITER, jnp.where(d > 0, PATH_NEWTON_MAX_ITER, NEWTON_MAX_ITER))
+    return guess, d_new, max_iter, jump
+
+
+def _path_update(mesh, params, path, y_new, ok, iterations, jump):
+    """The path after Newton's answer to :func:`_path_guess`: a converged step is taken
+    (the next step doubles if it was easy, halves if it was hard; after a jump the secant
+    starts afresh); a failed one is refused and the step cut to a quarter."""
+    factor = jnp.where(iterations <= PATH_EASY_ITER, 2.0, jnp.where(iterations >= PATH_HARD_ITER, 0.5, 1.0))
+    step = jnp.where(ok, jnp.maximum(path.step, SNAP_STEP * params[1]) * factor, path.step / 4)
+    return Path(
+        y=jnp.where(ok, y_new, path.y),
+        force=jnp.where(ok, plate_force(mesh, y_new, params), path.force),
+        previous=jnp.where(ok, jnp.where(jump, y_new, path.y), path.previous),
+        step=step,
+        count=path.count + 1,
+        failed=~ok & jump,
+    )
+
+
+def follow_travels(mesh, params, travels, step):
+    """Converged states (n, size) at each of ``travels`` (n,) (m, increasing from > 0),
+    following the path from the undeformed dome with first step ``step`` (m); whether
+    each was reached, and whether the path failed (at a snap) before it. Each travel may
+    take PATH_MAX_STEPS steps. Not differentiated (see :func:`implicit`)."""
+
+    def advance(path, goal):
+        guess, d_new, max_iter, jump = _path_guess(path, goal, params[1])
+        mask, held, force = _control(mesh, False, d_new)
+        y, ok, iterations = newton(mesh, mask, held, force, params, guess, max_iter)
+        return _path_update(mesh, params, path, y, ok, iterations, jump)
+
+    def to(path, goal):
+        path = eqx.tree_at(lambda p: p.count, path, jnp.asarray(0))
+        path = lax.while_loop(lambda p: (p.y[-1] < goal) & p.can_go_on(jnp.inf), lambda p: advance(p, goal), path)
+        return path, (path.y, path.y[-1] >= goal, path.failed)
+
+    _, (states, reached, failed) = lax.scan(to, _start_path(mesh, step), travels)
+    return states, reached, failed
+
+
+class Crossings(eqx.Module):
+    """The equilibria under force levels (k,) found on a followed path: ``states``
+    (k, size), ``found`` (the path carried the level), ``converged`` (its force-held solve
+    did), and the path's end: ``failed`` (a step did not converge), ``at_end`` (it reached
+    the largest travel). A level the path never carried holds the path's last state and
+    force (``forces``), itself an equilibrium under that force."""
+
+    states: jax.Array
+    forces: jax.Array
+    found: jax.Array
+    converged: jax.Array
+    failed: jax.Array
+    at_end: jax.Array
+
+
+def first_crossings(mesh, params, levels, max_travel, step):
+    """The equilibria at the first crossing of each of ``levels`` (k,) (N, > 0) on the path
+    followed from the undeformed dome (first step ``step``, m) up to the travel
+    ``max_travel`` (m). Each loop turn makes one Newton solve: a step of the path with the
+    travel held, or, once a step has carried a level, that level's solve with the force
+    held, from the states before and after interpolated in force; so one compiled Newton
+    serves both. Not differentiated (see :func:`implicit`)."""
+    k = levels.shape[0]
+    blank = jnp.zeros((k, mesh.size))
+    on_level = lambda mask, now, old: jnp.where(mask.reshape((k,) + (1,) * (now.ndim - 1)), now, old)  # noqa: E731
+
+    def cond(carry):
+        path, before, after, f_before, f_after, found, solved, _ = carry
+        return jnp.any(found & ~solved) | (~jnp.all(found) & path.can_go_on(max_travel))
+
+    def body(carry):
+        path, before, after, f_before, f_after, found, solved, c = carry
+        pending = found & ~solved
+        level = jnp.argmax(pending)
+        solving = pending[level]
+        span = f_after[level] - f_before[level]
+        w = jnp.clip((levels[level] - f_before[level]) / jnp.where(span > 0, span, 1.0), 0.0, 1.0)
+        guess, d_new, max_iter, jump = _path_guess(path, max_travel, params[1])
+        guess = jnp.where(solving, (1 - w) * before[level] + w * after[level], guess)
+        max_iter = jnp.where(solving, NEWTON_MAX_ITER, max_iter)
+        mask, held, force = _control(mesh, solving, jnp.where(solving, levels[level], d_new))
+        y, ok, iterations = newton(mesh, mask, held, force, params, guess, max_iter)
+
+        just = jnp.arange(k) == level
+        c = eqx.tree_at(
+            lambda c: (c.states, c.converged),
+            c,
+            (on_level(just & solving, jnp.broadcast_to(y, blank.shape), c.states), jnp.where(just & solving, ok, c.converged)),
+        )
+        new = _path_update(mesh, params, path, y, ok & ~solving, iterations, jump)
+        new = jax.tree.map(lambda a, b: jnp.where(solving, b, a), new, path)
+        crossed = ~solving & ok & ~found & (new.force >= levels)
+        before = on_level(crossed, jnp.broadcast_to(path.y, blank.shape), before)
+        after = on_level(crossed, jnp.broadcast_to(new.y, blank.shape), after)
+        f_before = jnp.where(crossed, path.force, f_before)
+        f_after = jnp.where(crossed, new.force, f_after)
+        return new, before, after, f_before, f_after, found | crossed, solved | (just & solving), c
+
+    none = jnp.zeros(k, bool)
+    c = Crossings(blank, levels, none, none, jnp.asarray(False), jnp.asarray(False))
+    start = (_start_path(mesh, step), blank, blank, jnp.zeros(k), jnp.zeros(k), none, none, c)
+    path, _, _, _, _, found, _, c = lax.while_loop(cond, body, start)
+    return Crossings(
+        states=on_level(found, c.states, jnp.broadcast_to(path.y, blank.shape)),
+        forces=jnp.where(found, levels, path.force),
+        found=found,
+        converged=jnp.where(found, c.converged, ~path.failed),
+        failed=path.failed,
+        at_end=path.y[-1] >= max_travel,
+    )

@@ -1,63 +1,106 @@
 """Hemispherical dome pressed at its apex by a rigid flat plate (PHYSICS.md 2.3, seed 001).
 
-Fidelity levels of the secant compliance (apex displacement / force, m/N):
+Fidelity levels:
 
 - ``"reissner"``: Reissner's thin-shell point-load stiffness
   K = 4 E t^2 / (R sqrt(3 (1 - nu^2))), R = outer_radius - t / 2 the mid-surface radius,
-  E and nu the material's small-strain moduli. Linear, cost ~ microseconds; its thin-shell
-  assumption costs accuracy for thick walls (0.371 mm/N for seed 001's dome, published FEM
-  and experiment 0.32 mm/N).
+  E and nu the material's small-strain moduli. Linear, cost ~ microseconds; it leaves out
+  what a thick wall adds (transverse shear, the wall's compression under the plate, large
+  deflections): 0.371 mm/N for seed 001's dome against the published FEM and experiment's
+  0.32 mm/N.
 - ``"axisymmetric"``: finite-strain axisymmetric finite elements of the thick wall
-  (9-node quadrilaterals, Q9/P3 volumetric projection) with smoothed penalty contact of a
-  frictionless plate; Newton's method on the total potential, first with the plate
-  travel held, then with the force held; implicit (exact) derivatives
-  (:mod:`magdesign.mechanics._axisymmetric`). Seed 001's dome at 5 N: 1.700 mm
-  (0.340 mm/N) bonded, 2.244 mm sliding; meshes (1, 8), (2, 16), (4, 32), (8, 64) give
-  1.714, 1.700, 1.704, 1.704 mm, so the default (2, 16) is within 0.25 % of the finest.
-  Published (Abaqus hybrid tetrahedra, friction 0.8, and experiment): 1.6 mm. Cost:
-  about 25 Newton iterations on ~330 unknowns, ~0.2 s warm on one core; compiling
-  ~10 s (value) and ~15 s more for derivatives.
+  (9-node quadrilaterals, Q9/P3 volumetric projection, graded towards the apex) with
+  penalty contact of a frictionless plate (:mod:`magdesign.mechanics._axisymmetric`). The
+  force-travel path is followed with the plate travel held, from the undeformed dome, so
+  it passes the points where a thin dome softens and its force falls; a force is found at
+  its first crossing on that path and solved there with the force held. Derivatives are
+  exact (implicit). Seed 001's dome at 5 N: see ``benchmarks/mechanics.py`` for the
+  travel, its mesh convergence and its cost.
+
+For thin walls the axisymmetric compliance tends to Reissner's (tested), but slowly: its
+excess is of the order of (t / R) log(R / t) (transverse shear and the wall's local
+compression under the plate) plus the large-deflection softening, about 0.5 d / t.
 """
 
+import functools
+
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import lax
 from jaxtyping import Array, ArrayLike, Float
 
-from magdesign._numerics import DOME_MIN_FORCE_FRACTION, DOME_START_TOL, ZERO_LOAD_FRACTION
-from magdesign._validation import check_nonnegative, check_positive
+from magdesign._numerics import DOME_MIN_TRAVEL_FRACTION
+from magdesign._validation import _concrete, check_nonnegative, check_positive
 from magdesign.mechanics import _axisymmetric
-from magdesign.mechanics.materials import AbstractMaterial
+from magdesign.mechanics.materials import AbstractHyperelastic, AbstractMaterial
 
 FIDELITIES = ("reissner", "axisymmetric")
 BASES = ("bonded", "sliding")
-# The axisymmetric solve first holds the plate at this fraction of Reissner's estimate of
-# the travel at the first wanted force (Reissner overestimates thick domes by ~10 %), then
-# holds the force; starting from the undeformed dome, one such step costs fewer Newton
-# iterations than several small ones (measured on seed 001's dome).
-START_TRAVEL_FRACTION = 0.9
+# (elements through the wall, elements along the meridian) of the axisymmetric level
+DEFAULT_MESH = (2, 16)
+# The first travel step of a followed path, as a fraction of Reissner's estimate of the
+# travel at the largest wanted force (the path doubles it while Newton converges easily).
+FIRST_STEP_FRACTION = 0.5
 
 
-def _check(outer_radius, thickness, material, max_force, fidelity, base, mesh):
+class DomeResult(eqx.Enumeration):
+    """Outcome of an axisymmetric dome solve."""
+
+    successful = "converged"
+    not_converged = (
+        "the axisymmetric dome did not converge: Newton left an out-of-balance force above "
+        "its tolerance (DOME_RESIDUAL_TOL mu t^2)"
+    )
+    force_not_reached = (
+        "the dome does not carry this force: its followed force-travel path reached a plate "
+        "travel of outer_radius - thickness (the wall pressed flat) first"
+    )
+    snapped = (
+        "the dome's force-travel path could not be followed past a snap: with the plate travel "
+        "held the equilibrium ceased to exist (as where a thin dome's apex inverts) and the jump "
+        "to the equilibrium beyond did not converge"
+    )
+    max_steps_reached = "the dome's force-travel path needed more steps than PATH_MAX_STEPS"
+
+
+class DomeCurve(eqx.Module):
+    """A force-travel path of the dome under plate-travel control, (n,) arrays.
+
+    Attributes:
+        travel: plate travel from first touch (m).
+        force: plate force (N), the reaction of the dome; differentiable.
+        contact_radius: radius (m) out to which the wall touches the plate (0 for
+            "reissner", a point load); not differentiable.
+        result: :class:`DomeResult` of each point.
+    """
+
+    travel: Float[Array, " n"]
+    force: Float[Array, " n"]
+    contact_radius: Float[Array, " n"]
+    result: DomeResult
+
+
+def _check(outer_radius, thickness, material, fidelity, base, mesh):
     if fidelity not in FIDELITIES:
         raise ValueError(f"fidelity must be one of {FIDELITIES}, got {fidelity!r}")
     if base not in BASES:
         raise ValueError(f"base must be one of {BASES}, got {base!r}")
     if not isinstance(material, AbstractMaterial):
         raise ValueError(f"material must be an AbstractMaterial, got {type(material).__name__}")
+    if fidelity == "axisymmetric" and not isinstance(material, AbstractHyperelastic):
+        raise ValueError(
+            f"material: the axisymmetric level needs a finite-strain law (NeoHookean or "
+            f"MooneyRivlin); {type(material).__name__} is a small-strain law, wrong under the "
+            f"rotations of a pressed dome (use it with fidelity='reissner')"
+        )
     if len(mesh) != 2 or any(int(n) != n or n < 1 for n in mesh):
         raise ValueError(f"mesh must be two positive integers (wall, meridian), got {mesh!r}")
     check_positive(outer_radius=outer_radius, thickness=thickness)
-    check_nonnegative(max_force=max_force)
-    if not _is_traced(outer_radius, thickness) and not thickness < outer_radius:
-        raise ValueError(
-            f"thickness must be smaller than outer_radius, got {thickness!r} >= {outer_radius!r}"
-        )
-
-
-def _is_traced(*values):
-    return any(isinstance(v, jax.core.Tracer) for v in values)
+    Ro, t = _concrete(outer_radius), _concrete(thickness)
+    if Ro is not None and t is not None and not np.all(t < Ro):
+        raise ValueError(f"thickness must be smaller than outer_radius, got {thickness!r} >= {outer_radius!r}")
 
 
 def _reissner_compliance(outer_radius, thickness, material):
@@ -66,23 +109,88 @@ def _reissner_compliance(outer_radius, thickness, material):
     return R * jnp.sqrt(3 * (1 - nu**2)) / (4 * E * thickness**2)
 
 
+@functools.lru_cache(maxsize=32)
+def _mesh(mesh, base):
+    return _axisymmetric.Mesh(int(mesh[0]), int(mesh[1]), base)
+
+
+def _as_arrays(tree):
+    """Python numbers as float64 arrays, so that compiled programs are reused across values."""
+    return jax.tree.map(lambda x: jnp.asarray(x, dtype=float), tree)
+
+
+@eqx.filter_jit
 def _axisymmetric_travels(outer_radius, thickness, material, forces, base, mesh):
-    """Plate travels (m) and converged flags at each of ``forces`` (n,) (N), increasing."""
-    m = _axisymmetric.Mesh(int(mesh[0]), int(mesh[1]), base)
+    """Plate travels (k,) (m) and results (k,) at each of ``forces`` (k,) (N, > 0), every
+    one found on the same followed path."""
+    m = _mesh(mesh, base)
     params = (outer_radius, thickness, material)
     fixed = lax.stop_gradient(params)
-    start = START_TRAVEL_FRACTION * _reissner_compliance(*fixed) * lax.stop_gradient(forces[0])
-    start = jnp.minimum(start, fixed[0] / 2)
-    states, converged = _axisymmetric.equilibria(m, params, forces, start, DOME_START_TOL)
-    return states[:, -1], converged
+    top = lax.stop_gradient(jnp.max(forces))
+    max_travel = fixed[0] - fixed[1]
+    step = jnp.minimum(FIRST_STEP_FRACTION * _reissner_compliance(*fixed) * top, max_travel / 4)
+    c = _axisymmetric.first_crossings(m, fixed, lax.stop_gradient(forces), max_travel, step)
+    # where the path never carried a force, its last state is returned, at its own force
+    states = _axisymmetric.implicit(m, "force", params, jnp.where(c.found, forces, c.forces), c.states)
+    path_result = DomeResult.where(
+        c.failed,
+        DomeResult.snapped,
+        DomeResult.where(c.at_end, DomeResult.force_not_reached, DomeResult.max_steps_reached),
+    )
+
+    def level_result(found, converged):
+        solved = DomeResult.where(converged, DomeResult.successful, DomeResult.not_converged)
+        return DomeResult.where(found, solved, path_result)
+
+    return states[:, -1], jax.vmap(level_result)(c.found, c.converged)
 
 
-def _effective_force(max_force, thickness, material, fidelity):
-    # 0 / 0 at zero load: evaluate at a floor (see _numerics; the axisymmetric level has
-    # its own, higher floor, DOME_MIN_FORCE_FRACTION mu t^2)
-    fraction = ZERO_LOAD_FRACTION if fidelity == "reissner" else DOME_MIN_FORCE_FRACTION
-    floor = fraction * material.shear_modulus * thickness**2
-    return jnp.maximum(jnp.asarray(max_force, dtype=float), floor)
+@eqx.filter_jit
+def _axisymmetric_curve(outer_radius, thickness, material, travels, base, mesh):
+    """(forces (n,) (N), contact radii (n,) (m), results (n,)) at ``travels`` (n,) (m)."""
+    m = _mesh(mesh, base)
+    params = (outer_radius, thickness, material)
+    fixed = lax.stop_gradient(params)
+    goals = lax.stop_gradient(travels)
+    solved, reached, failed = _axisymmetric.follow_travels(m, fixed, goals, goals[0])
+    states = _axisymmetric.implicit(m, "travel", params, travels, solved)
+    forces = jax.vmap(lambda y: _axisymmetric.plate_force(m, y, params))(states)
+    radii = jax.vmap(lambda y: _axisymmetric.contact_radius(m, y, fixed))(solved)
+    def point_result(reached, failed):
+        not_reached = DomeResult.where(failed, DomeResult.snapped, DomeResult.max_steps_reached)
+        return DomeResult.where(reached, DomeResult.successful, not_reached)
+
+    result = jax.vmap(point_result)(reached, failed)
+    return forces, radii, result
+
+
+def _force_floor(outer_radius, thickness, material):
+    """Smallest force (N) the axisymmetric level solves for: DOME_MIN_TRAVEL_FRACTION t of
+    Reissner's travel (see magdesign._numerics)."""
+    return DOME_MIN_TRAVEL_FRACTION * thickness / _reissner_compliance(outer_radius, thickness, material)
+
+
+def _travels(outer_radius, thickness, material, forces, base, mesh):
+    """(travels (m), results) at ``forces`` (N, any shape), forces below the floor raised to it."""
+    forces = jnp.asarray(forces, dtype=float)
+    floor = lax.stop_gradient(_force_floor(outer_radius, thickness, material))
+    effective = jnp.maximum(forces, floor)
+    travels, result = _axisymmetric_travels(
+        *_as_arrays((outer_radius, thickness, material)), effective.ravel(), base, tuple(mesh)
+    )
+    result = jax.tree.map(lambda value: value.reshape(forces.shape), result)
+    return travels.reshape(forces.shape), result, effective
+
+
+def _successful(shape):
+    """A :class:`DomeResult` array of ``shape``, all successful."""
+    return jax.tree.map(lambda value: jnp.broadcast_to(value, shape), DomeResult.successful)
+
+
+def _raise_unless_successful(value, result, throw):
+    if not throw:
+        return value, result
+    return result.error_if(value, result != DomeResult.successful)
 
 
 def dome_compliance(
@@ -90,33 +198,39 @@ def dome_compliance(
     outer_radius: Float[ArrayLike, ""],
     thickness: Float[ArrayLike, ""],
     material: AbstractMaterial,
-    max_force: Float[ArrayLike, ""],
+    max_force: Float[ArrayLike, "*k"],
     fidelity: str = "axisymmetric",
     base: str = "bonded",
-    mesh: tuple[int, int] = (2, 16),
-) -> Float[Array, ""]:
-    """Secant compliance (m/N) of a hemispherical dome: apex displacement at ``max_force``
-    divided by ``max_force``.
+    mesh: tuple[int, int] = DEFAULT_MESH,
+    throw: bool = True,
+) -> Float[Array, "*k"] | tuple[Float[Array, "*k"], DomeResult]:
+    """Secant compliance (m/N) of a hemispherical dome: the plate travel at the first
+    crossing of ``max_force`` on the force-travel path, divided by ``max_force``.
 
     Args:
         outer_radius: outer radius R_o of the hemisphere (m), > 0.
         thickness: wall thickness t (m), 0 < t < R_o.
-        material: the wall's material.
-        max_force: plate force (N), >= 0. Reissner: at 0 the zero-load limit is returned.
-            Axisymmetric: forces below DOME_MIN_FORCE_FRACTION mu t^2 (0.024 N for seed
-            001's dome) are evaluated at that floor (see magdesign._numerics).
+        material: the wall's material (axisymmetric: NeoHookean or MooneyRivlin).
+        max_force: plate force (N), >= 0; a scalar or an array, every force of which is
+            found on one followed path. Reissner: the same compliance at every force.
+            Axisymmetric: a force below DOME_MIN_TRAVEL_FRACTION t / C_Reissner (5.4 mN
+            for seed 001's dome) is evaluated at that floor (see magdesign._numerics).
         fidelity: "reissner" (closed form, linear) or "axisymmetric" (nonlinear FE).
         base: "bonded" (rim clamped, seed 001) or "sliding" (rim free to slide radially).
         mesh: (elements through the wall, elements along the meridian), axisymmetric only.
+        throw: if True, a solve that did not succeed raises an error naming what failed
+            (:class:`DomeResult`); if False, ``(compliance, result)`` is returned instead.
 
-    Raises ValueError naming the argument for a bad configuration or value.
+    Raises ValueError naming the argument for a bad configuration or value. A plain
+    Python call reuses the program compiled for the same fidelity, base, mesh and shape.
     """
-    _check(outer_radius, thickness, material, max_force, fidelity, base, mesh)
+    _check(outer_radius, thickness, material, fidelity, base, mesh)
+    check_nonnegative(max_force=max_force)
     if fidelity == "reissner":
-        return _reissner_compliance(outer_radius, thickness, material)
-    force = _effective_force(max_force, thickness, material, fidelity)
-    travels, _ = _axisymmetric_travels(outer_radius, thickness, material, force[None], base, mesh)
-    return travels[0] / force
+        compliance = jnp.broadcast_to(_reissner_compliance(outer_radius, thickness, material), jnp.shape(max_force))
+        return compliance if throw else (compliance, _successful(jnp.shape(max_force)))
+    travels, result, forces = _travels(outer_radius, thickness, material, max_force, base, mesh)
+    return _raise_unless_successful(travels / forces, result, throw)
 
 
 def dome_curve(
@@ -124,22 +238,53 @@ def dome_curve(
     outer_radius: Float[ArrayLike, ""],
     thickness: Float[ArrayLike, ""],
     material: AbstractMaterial,
-    max_force: Float[ArrayLike, ""],
+    travels: Float[ArrayLike, " n"] | None = None,
+    max_force: Float[ArrayLike, ""] | None = None,
     fidelity: str = "axisymmetric",
     base: str = "bonded",
-    mesh: tuple[int, int] = (2, 16),
+    mesh: tuple[int, int] = DEFAULT_MESH,
     n_points: int = 10,
-) -> tuple[Float[Array, " n_points"], Float[Array, " n_points"]]:
-    """(apex displacements (m), forces (N)) at forces max_force k / n_points, k = 1..n.
+    throw: bool = True,
+) -> DomeCurve:
+    """The force-travel path of the dome under plate-travel control (:class:`DomeCurve`).
 
-    Arguments as :func:`dome_compliance`. The Reissner level is a straight line.
+    Give either ``travels`` (n,) (m, increasing, > 0): the path at those plate travels; or
+    ``max_force`` (N, > 0): the path at ``n_points`` travels evenly spaced up to the first
+    crossing of that force (whose travel :func:`dome_compliance` divides by it).
+
+    Other arguments as :func:`dome_compliance`. With ``throw=True`` a point that did not
+    succeed raises an error naming what failed; with ``throw=False`` each point carries
+    its :class:`DomeResult`. A thin dome's path is followed through its softening: the
+    force may fall as the travel grows.
     """
-    _check(outer_radius, thickness, material, max_force, fidelity, base, mesh)
-    if int(n_points) != n_points or n_points < 1:
-        raise ValueError(f"n_points must be a positive integer, got {n_points!r}")
-    force = _effective_force(max_force, thickness, material, fidelity)
-    forces = force * np.arange(1, n_points + 1) / n_points
+    _check(outer_radius, thickness, material, fidelity, base, mesh)
+    if (travels is None) == (max_force is None):
+        raise ValueError("give exactly one of travels (m) and max_force (N)")
+    reissner = _reissner_compliance(outer_radius, thickness, material)
+    if travels is None:
+        check_positive(max_force=max_force)
+        if int(n_points) != n_points or n_points < 1:
+            raise ValueError(f"n_points must be a positive integer, got {n_points!r}")
+        fractions = np.arange(1, n_points + 1) / n_points
+        if fidelity == "reissner":
+            travels = jnp.asarray(reissner * max_force * fractions, dtype=float)
+        else:
+            end, crossing, _ = _travels(outer_radius, thickness, material, max_force, base, mesh)
+            travels = end * fractions
+    else:
+        crossing = None
+        travels = jnp.asarray(travels, dtype=float)
+        concrete = _concrete(travels)
+        if travels.ndim != 1 or (concrete is not None and not (np.all(concrete > 0) and np.all(np.diff(concrete) > 0))):
+            raise ValueError(f"travels must be a 1-D array of increasing positive plate travels (m), got {travels!r}")
     if fidelity == "reissner":
-        return _reissner_compliance(outer_radius, thickness, material) * forces, forces
-    travels, _ = _axisymmetric_travels(outer_radius, thickness, material, forces, base, mesh)
-    return travels, forces
+        return DomeCurve(travels, travels / reissner, jnp.zeros_like(travels), _successful(travels.shape))
+    forces, radii, result = _axisymmetric_curve(
+        *_as_arrays((outer_radius, thickness, material)), travels, base, tuple(mesh)
+    )
+    if crossing is not None:  # the path's own result where the wanted force was not carried
+        result = DomeResult.where(crossing == DomeResult.successful, result, crossing)
+    curve = DomeCurve(travels, forces, radii, result)
+    if throw:
+        curve = result.error_if(curve, result != DomeResult.successful)
+    return curve
