@@ -12,7 +12,8 @@ from jaxtyping import Array, Float
 
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable
 from magdesign.fields import cylinder_on_axis
-from magdesign.mechanics import MooneyRivlin, dome_compliance
+from magdesign.mechanics import DomeResult, MooneyRivlin, dome_compliance
+from magdesign.scene import MECHANICS_CONVERGED
 from magdesign.units import mm, mT
 
 
@@ -32,12 +33,13 @@ class DomeHallModel(eqx.Module):
         return cylinder_on_axis(z, radius=self.radius, height=self.height, remanence=self.remanence)
 
     def __call__(self, values: dict[str, Float[Array, ""]]) -> dict[str, Float[Array, ""]]:
-        compliance = dome_compliance(
+        compliance, result = dome_compliance(
             outer_radius=self.outer_radius,
             thickness=values["thickness"],
             material=self.material,
             max_force=self.max_force,
             fidelity=self.fidelity,
+            throw=False,
         )
         closest = values["gap"] - compliance * self.max_force
         field_closest, field_rest = self.field(closest), self.field(values["gap"])
@@ -47,6 +49,7 @@ class DomeHallModel(eqx.Module):
             "field_closest": field_closest,
             "field_rest": field_rest,
             "sensitivity": (field_closest - field_rest) / self.max_force,
+            MECHANICS_CONVERGED: (result == DomeResult.successful).astype(float),
         }
 
 
@@ -62,4 +65,5 @@ def default_problem(fidelity: str = "reissner") -> Problem:
         [Limit("field_closest", upper=4.8 * mT, unit="mT")],
         Objective("sensitivity", "max"),
         report=("closest_gap",),
+        converged=MECHANICS_CONVERGED,
     )

@@ -154,6 +154,10 @@ class Problem(eqx.Module):
         targets: equalities on outputs; limits: inequalities; objective: optional.
         report: further outputs to evaluate and report at the solution: names, or
             {name: display unit ("mm") or None for SI}.
+        converged: optionally, the name of a model output that is 1 where every solver
+            inside the model converged and 0 where one did not (a scene's
+            "mechanics_converged"); a solution where it is below 1/2 gets the status
+            "mechanics_not_converged", never "successful".
     """
 
     model: Callable
@@ -163,8 +167,9 @@ class Problem(eqx.Module):
     objective: Objective | None
     report: tuple[str, ...] = eqx.field(static=True)
     report_units: tuple[tuple[str, str | None], ...] = eqx.field(static=True)
+    converged: str | None = eqx.field(static=True)
 
-    def __init__(self, model, variables, targets=(), limits=(), objective=None, report=()):
+    def __init__(self, model, variables, targets=(), limits=(), objective=None, report=(), converged=None):
         self.model = model
         self.variables = tuple(variables)
         self.targets = tuple(targets)
@@ -173,6 +178,7 @@ class Problem(eqx.Module):
         report_units = dict(report) if isinstance(report, Mapping) else dict.fromkeys(report)
         self.report = tuple(report_units)
         self.report_units = tuple(report_units.items())
+        self.converged = converged
         if not self.variables:
             raise ValueError("variables: a problem needs at least one free variable")
         for kind, names in (
@@ -191,6 +197,7 @@ class Problem(eqx.Module):
         """The model outputs the solver reads or reports, each once, in a fixed order."""
         names = [t.output for t in self.targets] + [lim.output for lim in self.limits]
         names += [self.objective.output] if self.objective is not None else []
+        names += [self.converged] if self.converged is not None else []
         return tuple(dict.fromkeys(names + list(self.report)))
 
     @property

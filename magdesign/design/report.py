@@ -6,7 +6,14 @@ import numpy as np
 from magdesign.units import convert
 
 # The solver's outcomes; optimistix RESULTS names where one fits.
-STATUS_NAMES = ("successful", "infeasible_target", "limit_violated", "max_steps_reached", "nonfinite")
+STATUS_NAMES = (
+    "successful",
+    "infeasible_target",
+    "limit_violated",
+    "max_steps_reached",
+    "nonfinite",
+    "mechanics_not_converged",
+)
 
 
 def _keys(problem):
@@ -25,7 +32,8 @@ class DesignResult(eqx.Module):
 
     Attributes:
         status: "successful", or why not: "infeasible_target" (see ``violated``),
-            "limit_violated", "max_steps_reached", "nonfinite".
+            "limit_violated", "max_steps_reached", "nonfinite", "mechanics_not_converged"
+            (a solver inside the model, e.g. the dome's, did not converge at the end).
         parameters: {variable: value}.
         targets: {output: {"target": value, "achieved": value}}.
         limits: {output: {"upper" and/or "lower": bound, "achieved": value, "active": bool}}.

@@ -48,7 +48,7 @@ from magdesign.design.problem import Problem
 from magdesign.design.report import STATUS_NAMES, DesignResult, DesignSweep
 
 # Status codes of the core, indices into STATUS_NAMES.
-(SUCCESSFUL, INFEASIBLE_TARGET, LIMIT_VIOLATED, MAX_STEPS_REACHED, NONFINITE) = range(5)
+(SUCCESSFUL, INFEASIBLE_TARGET, LIMIT_VIOLATED, MAX_STEPS_REACHED, NONFINITE, MECHANICS_NOT_CONVERGED) = range(6)
 _DAMPING_DOWN = 3.0
 _DAMPING_UP = 4.0
 # Rounds of the active-set polish: each adds or drops constraints found wrong by the last.
@@ -450,14 +450,18 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
 
     # Stationarity is a gradient condition: met to sqrt(rtol), as the optimum's value is.
     kkt_met = ~state.changed & (jnp.max(jnp.abs(r), initial=0.0) <= jnp.sqrt(tol))
+    inner_failed = (
+        jet.outputs[problem.outputs.index(problem.converged)] < 0.5 if problem.converged is not None else False
+    )
     status = jnp.select(
         [
             ~finite,
+            inner_failed,
             jnp.any(jnp.abs(c[:n_targets]) > tol),
             jnp.any(c[n_targets:] > tol),
             ~kkt_met,
         ],
-        [NONFINITE, INFEASIBLE_TARGET, LIMIT_VIOLATED, MAX_STEPS_REACHED],
+        [NONFINITE, MECHANICS_NOT_CONVERGED, INFEASIBLE_TARGET, LIMIT_VIOLATED, MAX_STEPS_REACHED],
         SUCCESSFUL,
     )
     return CoreSolution(
@@ -582,7 +586,8 @@ def solve(
 
     Returns:
         A :class:`DesignResult`: status ("successful", "infeasible_target",
-        "limit_violated", "max_steps_reached" or "nonfinite"), parameters, achieved
+        "limit_violated", "max_steps_reached", "nonfinite" or
+        "mechanics_not_converged"), parameters, achieved
         targets and limits, active bounds and limits, steps, seconds, and the implicit
         derivatives of the parameters with respect to the target values and active limit
         bounds.

@@ -25,7 +25,7 @@ import jax
 from jaxtyping import Array
 
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable
-from magdesign.scene import AbstractScene, outputs, parameters, scene_from_spec, with_parameters
+from magdesign.scene import MECHANICS_CONVERGED, AbstractScene, outputs, parameters, scene_from_spec, with_parameters
 from magdesign.units import SpecError, parse, written_unit
 
 _VARIABLE_KEYS = ("lower", "upper", "start", "scale")
@@ -167,5 +167,9 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
     if not targets and not limits and objective is None:
         raise SpecError("design: expected at least one of [design.targets], [design.limits], [design.objective]")
 
-    problem = Problem(SceneModel(scene), variables, targets=targets, limits=limits, objective=objective, report=report)
+    converged = MECHANICS_CONVERGED if MECHANICS_CONVERGED in known_outputs else None
+    problem = Problem(
+        SceneModel(scene), variables, targets=targets, limits=limits, objective=objective, report=report,
+        converged=converged,
+    )
     return problem, scene

@@ -18,7 +18,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import optimistix as optx
-from jaxtyping import Array, ArrayLike, Float, Int
+from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
 from magdesign._numerics import FD_CALIBRATION_STEP, LSQ_ATOL, LSQ_RTOL, safe_div, safe_sqrt
 from magdesign.inverse._jacobian import difference_jacobian
@@ -34,7 +34,9 @@ class Calibration(eqx.Module):
         values: fitted constants by name (SI).
         uncertainty: their standard deviations by name (SI).
         residuals: (n, S, C) readings minus the fitted model.
-        result: the optimistix result (``optx.RESULTS``).
+        result: the optimistix result (``optx.RESULTS``) of the fit.
+        mechanics_converged: whether the scene's mechanics converged at every load with
+            the fitted constants (where not, the fit is not to be trusted).
         steps: solver steps taken.
     """
 
@@ -42,6 +44,7 @@ class Calibration(eqx.Module):
     uncertainty: dict[str, Float[Array, ""]]
     residuals: Float[Array, "n s c"]
     result: optx.RESULTS
+    mechanics_converged: Bool[Array, ""]
     steps: Int[Array, ""]
 
 
@@ -74,7 +77,7 @@ def _calibrate(scene, names, loads, readings, noise, max_steps):
 
     def model(y):
         fitted = with_parameters(scene, {name: start[name] * y[i] for i, name in enumerate(names)})
-        return chain(fitted, fitted.displacement(loads), time=loads.time, without=("noise",))[2]
+        return chain(fitted, fitted.displacement(loads)[0], time=loads.time, without=("noise",))[2]
 
     flat_model = difference_jacobian(lambda y: model(y).ravel(), FD_CALIBRATION_STEP)
 
@@ -90,10 +93,12 @@ def _calibrate(scene, names, loads, readings, noise, max_steps):
     _, singular, vt = jnp.linalg.svd(jacobian, full_matrices=False)
     variance = jnp.einsum("ki,k,ki->i", vt, safe_div(1.0, singular**2), vt)
     sigma = scale * safe_sqrt(variance)
+    fitted = {name: start[name] * solution.value[i] for i, name in enumerate(names)}
     return Calibration(
-        values={name: start[name] * solution.value[i] for i, name in enumerate(names)},
+        values=fitted,
         uncertainty={name: jnp.abs(start[name]) * sigma[i] for i, name in enumerate(names)},
         residuals=readings - model(solution.value),
         result=solution.result,
+        mechanics_converged=jnp.all(with_parameters(scene, fitted).displacement(loads)[1]),
         steps=solution.stats["num_steps"],
     )

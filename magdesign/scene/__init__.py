@@ -10,6 +10,7 @@ Example::
 
 from magdesign.scene.build import scene_from_spec as scene_from_spec
 from magdesign.scene.core import AbstractScene as AbstractScene
+from magdesign.scene.core import MECHANICS_CONVERGED as MECHANICS_CONVERGED
 from magdesign.scene.core import outputs as outputs
 from magdesign.scene.core import parameters as parameters
 from magdesign.scene.core import simulate as simulate

@@ -16,12 +16,16 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, ArrayLike, Float, PRNGKeyArray
+from jaxtyping import Array, ArrayLike, Bool, Float, PRNGKeyArray
 
 from magdesign.scene.effects import AbstractEffect, AreaAveraging
 from magdesign.scene.loads import Loads
 from magdesign.scene.pose import to_chip
 from magdesign.units import SpecError
+
+# Name of the scene output that is 1 where the mechanics' solve converged and 0 where it
+# did not (a design solve reports the latter as "mechanics_not_converged").
+MECHANICS_CONVERGED = "mechanics_converged"
 
 
 class AbstractScene(eqx.Module):
@@ -54,8 +58,9 @@ class AbstractScene(eqx.Module):
         """Nominal sensor positions (S, 3) (m) and chip rotations (S, 3, 3), scene frame."""
 
     @abc.abstractmethod
-    def displacement(self, loads: Loads) -> Float[Array, "n 3"]:
-        """Displacement (m) of the source relative to the sensors at each load point."""
+    def displacement(self, loads: Loads) -> tuple[Float[Array, "n 3"], Bool[Array, " n"]]:
+        """Displacement (m) of the source relative to the sensors at each load point, and
+        whether the mechanics' solve converged there (n,)."""
 
     @abc.abstractmethod
     def source_field(self, points: Float[Array, "... 3"], displacement: Float[Array, "3"]) -> Float[Array, "... 3"]:
@@ -92,10 +97,13 @@ class SimulationResult(eqx.Module):
             field effects applied (T).
         readings: (n, S, C) transducer readings with all effects (reading unit).
         extras: further named arrays (scene-specific).
+        converged: (n,) whether the mechanics' solve converged at each load point; where
+            it did not, the row's numbers are not an equilibrium.
         labels: names of the C reading channels; unit: their unit (static).
     """
 
     loads: Loads
+    converged: Bool[Array, " n"]
     displacement: Float[Array, "n 3"]
     field: Float[Array, "n s 3"]
     readings: Float[Array, "n s c"]
@@ -193,9 +201,12 @@ def simulate(scene: AbstractScene, loads: Loads, *, key: PRNGKeyArray | None = N
 
     ``key`` (a JAX PRNG key) is needed only when the scene lists ``noise``.
     """
-    displacement, field, readings, probe_field = chain(scene, scene.displacement(loads), time=loads.time, key=key)
+    displacement, converged = scene.displacement(loads)
+    displacement, field, readings, probe_field = chain(scene, displacement, time=loads.time, key=key)
     extras = scene.extras(displacement, loads, probe_field)
-    return SimulationResult(loads, displacement, field, readings, extras, scene.reading_labels, scene.reading_unit)
+    return SimulationResult(
+        loads, converged, displacement, field, readings, extras, scene.reading_labels, scene.reading_unit
+    )
 
 
 def _si_to_display(unit):
@@ -204,7 +215,8 @@ def _si_to_display(unit):
 
 
 def simulation_table(result: SimulationResult) -> str:
-    """A readable table: one row per load point, forces (N), displacement (mm), readings."""
+    """A readable table: one row per load point, forces (N), displacement (mm), readings;
+    then a warning naming the load points where the mechanics did not converge."""
     unit, factor = _si_to_display(result.unit)
     readings = np.asarray(result.readings) * factor
     n, sensors, channels = readings.shape
@@ -222,6 +234,10 @@ def simulation_table(result: SimulationResult) -> str:
     lines += ["  ".join(v.rjust(w) for v, w in zip(row, widths)) for row in rows]
     for name, value in result.extras.items():
         lines.append(f"{name}: {np.array2string(np.asarray(value), precision=6)}")
+    failed = np.flatnonzero(~np.asarray(result.converged))
+    if failed.size:
+        rows_failed = ", ".join(str(i + 1) for i in failed)
+        lines.append(f"warning: the mechanics did not converge at load points {rows_failed}: those rows are not equilibria")
     return "\n".join(lines)
 
 
@@ -239,5 +255,6 @@ def simulation_json(result: SimulationResult) -> dict:
         "displacement": np.asarray(result.displacement).tolist(),
         "field": np.asarray(result.field).tolist(),
         "readings": np.asarray(result.readings).tolist(),
+        "converged": np.asarray(result.converged).tolist(),
         "extras": {name: np.asarray(value).tolist() for name, value in result.extras.items()},
     }

@@ -18,6 +18,7 @@ Outputs (:meth:`MagnetScene.outputs`), at the sweep's largest normal force F:
                        sensors and over OUTPUT_POINTS loads from 0 to F (T)
     inplane_field_min  the smallest (most negative) B_a over the same (T)
     outer_radius       the dome's outer radius (m), for dome scenes only
+    mechanics_converged  1 if the mechanics' solve at F converged, else 0 (-)
 """
 
 from typing import ClassVar
@@ -28,7 +29,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from magdesign.fields import cylinder
-from magdesign.scene.core import AbstractScene
+from magdesign.scene.core import MECHANICS_CONVERGED, AbstractScene
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.mechanics import AbstractMechanics
 from magdesign.scene.pose import rotation, to_chip
@@ -95,6 +96,7 @@ class MagnetScene(AbstractScene):
         "sensitivity": "T/N",
         "inplane_field_max": "T",
         "inplane_field_min": "T",
+        MECHANICS_CONVERGED: "1",
     }
 
     @property
@@ -144,7 +146,7 @@ class MagnetScene(AbstractScene):
 
     def outputs(self):
         force = self.max_force
-        compliance = self.mechanics.compliance(force)
+        compliance, converged = self.mechanics.compliance(force)
         closest = jnp.array([0.0, 0.0, -1.0]) * compliance * force
         # one field evaluation over the sweep from rest (first point) to closest (last)
         sweep = jnp.linspace(0.0, 1.0, OUTPUT_POINTS)[:, None] * closest
@@ -159,6 +161,7 @@ class MagnetScene(AbstractScene):
             "sensitivity": (field_closest - field_rest) / force,
             "inplane_field_max": jnp.max(jnp.abs(inplane)),
             "inplane_field_min": jnp.min(inplane),
+            MECHANICS_CONVERGED: converged.astype(float),
             **self.mechanics.outputs(),
         }
 

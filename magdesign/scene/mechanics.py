@@ -1,16 +1,16 @@
 """How a scene's load moves its source: a dome or an elastomer layer.
 
 Each model maps a :class:`~magdesign.scene.Loads` sweep to the source's displacement
-(n, 3) (m) relative to the sensors; pressing (normal force > 0) moves it by -z.
+(n, 3) (m) relative to the sensors, with whether its solve converged at each load (n,);
+pressing (normal force > 0) moves it by -z.
 """
 
 import abc
 from typing import ClassVar
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float
+from jaxtyping import Array, Bool, Float
 
 from magdesign import mechanics
 from magdesign.mechanics import AbstractMaterial, LinearElastic, MooneyRivlin, NeoHookean
@@ -40,12 +40,13 @@ class AbstractMechanics(eqx.Module):
         return paths
 
     @abc.abstractmethod
-    def displacement(self, loads: Loads) -> Float[Array, "n 3"]:
-        """Displacement (m), (n, 3), at each load point."""
+    def displacement(self, loads: Loads) -> tuple[Float[Array, "n 3"], Bool[Array, " n"]]:
+        """Displacement (m), (n, 3), at each load point, and whether it converged (n,)."""
 
     @abc.abstractmethod
-    def compliance(self, force: Float[Array, ""]) -> Float[Array, ""]:
-        """Secant normal compliance (m/N): normal displacement / ``force`` (N)."""
+    def compliance(self, force: Float[Array, ""]) -> tuple[Float[Array, ""], Bool[Array, ""]]:
+        """Secant normal compliance (m/N), normal displacement / ``force`` (N), and whether
+        it converged."""
 
     def outputs(self) -> dict[str, Float[Array, ""]]:
         """Scalar outputs of the mechanics' own geometry for design objectives (SI)."""
@@ -56,8 +57,9 @@ class Dome(AbstractMechanics):
     """Seed 001's hemispherical dome pressed at its apex by a flat plate (PHYSICS.md 2.3).
 
     The apex moves by -C(F) F along z, C the secant compliance of
-    :func:`magdesign.mechanics.dome_compliance` at that force. A dome carries no
-    modelled shear: shear loads do not move it.
+    :func:`magdesign.mechanics.dome_compliance` at that force (every force of a sweep
+    found on one followed path; ``throw=False``: its result becomes the converged flag). A
+    dome carries no modelled shear: shear loads do not move it.
     """
 
     outer_radius: Float[Array, ""]
@@ -69,14 +71,16 @@ class Dome(AbstractMechanics):
     PARAMETERS: ClassVar = {"mechanics.outer_radius": lambda m: m.outer_radius, "mechanics.thickness": lambda m: m.thickness}
 
     def compliance(self, force):
-        return mechanics.dome_compliance(
+        compliance, result = mechanics.dome_compliance(
             outer_radius=self.outer_radius,
             thickness=self.thickness,
             material=self.material,
             max_force=force,
             fidelity=self.fidelity,
             base=self.base,
+            throw=False,
         )
+        return compliance, result == mechanics.DomeResult.successful
 
     output_units: ClassVar = {"outer_radius": "m"}
 
@@ -84,8 +88,9 @@ class Dome(AbstractMechanics):
         return {"outer_radius": self.outer_radius}
 
     def displacement(self, loads):
-        uz = jax.vmap(lambda force: -self.compliance(force) * force)(loads.normal)
-        return jnp.stack([jnp.zeros_like(uz), jnp.zeros_like(uz), uz], axis=-1)
+        compliance, converged = self.compliance(loads.normal)
+        uz = -compliance * loads.normal
+        return jnp.stack([jnp.zeros_like(uz), jnp.zeros_like(uz), uz], axis=-1), converged
 
 
 class Layer(AbstractMechanics):
@@ -107,8 +112,9 @@ class Layer(AbstractMechanics):
         return mechanics.layer_stiffness(thickness=self.thickness, area=self.contact_area, material=self.material, fidelity=self.fidelity)
 
     def compliance(self, force):
-        return 1.0 / self.stiffness.normal
+        return 1.0 / self.stiffness.normal, jnp.asarray(True)
 
     def displacement(self, loads):
         stiffness = self.stiffness
-        return jnp.concatenate([loads.shear / stiffness.shear, -loads.normal[:, None] / stiffness.normal], axis=-1)
+        u = jnp.concatenate([loads.shear / stiffness.shear, -loads.normal[:, None] / stiffness.normal], axis=-1)
+        return u, jnp.ones(loads.normal.shape, bool)

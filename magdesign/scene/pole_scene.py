@@ -121,7 +121,7 @@ class PoleScene(AbstractScene):
 
     def displacement(self, loads):
         theta = loads.shear[:, 0] / self.spring
-        return jax.vmap(self.tip)(theta) - self.tip(0.0)
+        return jax.vmap(self.tip)(theta) - self.tip(0.0), jnp.ones(theta.shape, bool)
 
     def source_field(self, points, displacement):
         # one plate-field evaluation for the points and the rod's tip (one compiled kernel)
