@@ -5,12 +5,18 @@
     magdesign accuracy [--json] [--plot FILE]
 
 Exit codes: 0 done (solve: solved), 2 bad spec or arguments (one line naming the key),
-3 solve not successful (the status and the violated target are printed).
+3 solve not successful (the status and the violated target are printed) or a simulation
+whose mechanics did not converge at some load point.
+
+Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax; see
+:func:`cache_directory`; MAGDESIGN_NO_CACHE=1 turns it off).
 """
 
 import argparse
 import json
+import os
 import sys
+from pathlib import Path
 
 import jax
 
@@ -23,6 +29,32 @@ from magdesign.units import SpecError
 
 EXIT_BAD_SPEC = 2
 EXIT_NOT_SOLVED = 3
+# Programs that took longer than this to compile are kept in the persistent cache (JAX's own
+# JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS, when set, wins).
+CACHE_MIN_COMPILE_SECONDS = 0.5
+
+
+def cache_directory():
+    """Where the command keeps compiled programs (JAX's persistent compilation cache):
+    $MAGDESIGN_CACHE_DIR, else $XDG_CACHE_HOME/magdesign/jax, else ~/.cache/magdesign/jax;
+    None when MAGDESIGN_NO_CACHE is set to anything but "" or "0"."""
+    if os.environ.get("MAGDESIGN_NO_CACHE", "") not in ("", "0"):
+        return None
+    if os.environ.get("MAGDESIGN_CACHE_DIR"):
+        return Path(os.environ["MAGDESIGN_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "magdesign" / "jax"
+
+
+def use_compilation_cache():
+    """Turn on JAX's persistent compilation cache (see :func:`cache_directory`), so that a
+    second run of the same command reuses the programs the first compiled."""
+    directory = cache_directory()
+    if directory is None:
+        return
+    jax.config.update("jax_compilation_cache_dir", str(directory))
+    if "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS" not in os.environ:
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", CACHE_MIN_COMPILE_SECONDS)
 
 
 def build_parser():
@@ -66,7 +98,7 @@ def run_simulate(args):
     scene = scene_from_spec(spec)
     result = simulate(scene, loads_from_spec(spec), key=jax.random.key(0))
     print(json.dumps(simulation_json(result)) if args.json else simulation_table(result))
-    return 0
+    return 0 if bool(result.converged.all()) else EXIT_NOT_SOLVED
 
 
 def run_accuracy(args):
@@ -79,6 +111,7 @@ def run_accuracy(args):
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    use_compilation_cache()
     command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy}[args.command]
     try:
         return command(args)

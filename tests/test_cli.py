@@ -1,6 +1,7 @@
 """The magdesign command: JSON contract, exit codes, one-line errors."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -71,3 +72,31 @@ def test_missing_spec_file_exits_2(capsys):
 def test_every_example_simulates(example, capsys):
     assert main(["simulate", str(EXAMPLES / example), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)
+
+
+def test_the_command_keeps_compiled_programs_in_its_cache_folder(tmp_path):
+    cache = tmp_path / "cache"
+    env = {**os.environ, "MAGDESIGN_CACHE_DIR": str(cache), "MAGDESIGN_NO_CACHE": "", "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0"}
+    command = [sys.executable, "-m", "magdesign", "simulate", str(EXAMPLES / "dome_hall.toml"), "--json"]
+    assert subprocess.run(command, capture_output=True, env=env).returncode == 0
+    assert any(cache.iterdir())
+    off = tmp_path / "off"
+    env = {**env, "MAGDESIGN_CACHE_DIR": str(off), "MAGDESIGN_NO_CACHE": "1"}
+    assert subprocess.run(command, capture_output=True, env=env).returncode == 0
+    assert not off.exists()
+
+
+def test_simulate_flags_load_points_where_the_dome_did_not_converge(tmp_path, capsys):
+    """A thin dome at axisymmetric fidelity pressed past its snap: exit 3, a warning, and
+    the JSON says which points converged."""
+    text = (EXAMPLES / "dome_hall.toml").read_text()
+    for old, new in (('thickness = "2 mm"', 'thickness = "1 mm"'), ('fidelity = "reissner"', 'fidelity = "axisymmetric"')):
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "thin.toml"
+    path.write_text(text)
+    assert main(["simulate", str(path)]) == 3
+    assert "did not converge" in capsys.readouterr().out
+    assert main(["simulate", str(path), "--json"]) == 3
+    converged = json.loads(capsys.readouterr().out)["converged"]
+    assert converged[0] and not converged[-1]
