@@ -1,22 +1,38 @@
-"""Warm timings of the dome models (run by hand: python benchmarks/mechanics.py).
+"""Dome models: accuracy against a refined mesh, and what each call costs (run by hand:
+``taskset -c 0 python benchmarks/mechanics.py``; pinning to one core steadies the timings).
 
-Prints, per fidelity, the compile time (first call) and the best warm time of a 5 N
-load path of seed 001's dome (one value) and of its gradient with respect to outer
-radius, thickness, c10 and c01. The best of several repeats is reported: on a shared
-machine XLA's worker threads wait for cores, and single timings scatter by 10x or more
-(pinning the process, ``taskset -c 0 python benchmarks/mechanics.py``, steadies them).
+Prints
+1. mesh convergence of the axisymmetric level: the seed-001 dome (R_o 8 mm, t 2 mm, 5 N)
+   and a thin dome (R_o 8 mm, t 0.4 mm, t/R 0.05, travel t/10) against the refined mesh
+   REFERENCE_MESH, with the best warm time of one jitted call per mesh;
+2. the cost of calls: Reissner and the axisymmetric 5 N path (jitted, warm), its gradient
+   with respect to outer radius, thickness, c10 and c01, and a second plain-Python call
+   with a new thickness (which reuses the compiled program);
+3. the default design (examples/dome_hall.toml) at each dome level: first call (compile
+   included) and warm solve.
+Timings are the best of REPEATS (first calls and the reference mesh: one each).
 """
 
 import time
 
 import jax
+import jax.numpy as jnp
 
 import magdesign  # noqa: F401  (float64)
-from magdesign.mechanics import MooneyRivlin, dome_compliance
+from magdesign.design import solve
+from magdesign.design.spec import default_spec, problem_from_spec
+from magdesign.mechanics import MooneyRivlin, dome_compliance, dome_curve
+from magdesign.mechanics.dome import DEFAULT_MESH
+from magdesign.units import mm
+
+REPEATS = 5
+RESIN = MooneyRivlin(c10=0.1182e6, c01=0.1769e6)
+MESHES = ((1, 12), (2, 12), (2, 16), (3, 24), (4, 32))
+REFERENCE_MESH = (6, 48)
 
 
-def _times(fn, *args, repeats=5):
-    """(compile + first call (s), best warm call (s), result)."""
+def _first_and_best(fn, *args, repeats=REPEATS):
+    """(first call (s), best of ``repeats`` further calls (s), result)."""
     start = time.perf_counter()
     out = jax.block_until_ready(fn(*args))
     first = time.perf_counter() - start
@@ -28,22 +44,78 @@ def _times(fn, *args, repeats=5):
     return first, best, out
 
 
-def main():
-    def compliance(Ro, t, c10, c01, fidelity):
-        return dome_compliance(outer_radius=Ro, thickness=t,
-                               material=MooneyRivlin(c10=c10, c01=c01), max_force=5.0,
-                               fidelity=fidelity)
+def seed_compliance(mesh):
+    """Jitted seed-001 compliance at 5 N (m/N) as a function of the wall thickness (m)."""
+    return jax.jit(lambda t: dome_compliance(outer_radius=8 * mm, thickness=t, material=RESIN, max_force=5.0, mesh=mesh))
 
-    args = (8e-3, 2e-3, 0.1182e6, 0.1769e6)
-    print(f"{'model':<28}{'compile (s)':>14}{'warm (s)':>12}{'value':>20}")
+
+def thin_force(mesh):
+    """Jitted plate force (N) of the 8 / 0.4 mm dome at travel t/10, from its wall (m)."""
+    return jax.jit(
+        lambda t: dome_curve(outer_radius=8 * mm, thickness=t, material=RESIN, travels=(t / 10)[None], mesh=mesh).force[0]
+    )
+
+
+def mesh_convergence():
+    print("1. mesh convergence of the axisymmetric dome (error against the refined mesh "
+          f"{REFERENCE_MESH[0]}x{REFERENCE_MESH[1]}; default mesh {DEFAULT_MESH[0]}x{DEFAULT_MESH[1]})")
+    cases = (("seed 001, 8/2 mm, 5 N compliance", seed_compliance, 2 * mm, 1e3, "mm/N"),
+             ("thin, 8/0.4 mm, force at t/10", thin_force, 0.4 * mm, 1e3, "mN"))
+    print(f"   {'case':<36}{'mesh':>7}{'value':>14}{'error':>11}{'warm (s)':>11}")
+    for name, build, thickness, scale, unit in cases:
+        t = jnp.asarray(thickness)
+        _, reference_seconds, reference = _first_and_best(build(REFERENCE_MESH), t, repeats=1)
+        reference = float(reference)
+        for mesh in MESHES + (REFERENCE_MESH,):
+            _, warm, value = (None, reference_seconds, reference) if mesh == REFERENCE_MESH else _first_and_best(build(mesh), t)
+            error = float(value) / reference - 1.0
+            print(f"   {name:<36}{mesh[0]}x{mesh[1]:<5}{float(value) * scale:>9.5f} {unit:<4}{error:>+11.2e}{warm:>11.3g}")
+
+
+def call_costs():
+    print("\n2. cost of one call (seed-001 dome, 5 N, default mesh)")
+    args = tuple(jnp.asarray(a) for a in (8 * mm, 2 * mm, RESIN.c10, RESIN.c01))
+
+    def compliance(Ro, t, c10, c01, fidelity):
+        return dome_compliance(outer_radius=Ro, thickness=t, material=MooneyRivlin(c10=c10, c01=c01),
+                               max_force=5.0, fidelity=fidelity)
+
+    print(f"   {'call':<44}{'first (s)':>12}{'warm (s)':>12}")
     for fidelity in ("reissner", "axisymmetric"):
         value = jax.jit(lambda *a, f=fidelity: compliance(*a, f))
         grad = jax.jit(jax.grad(lambda *a, f=fidelity: compliance(*a, f), argnums=(0, 1, 2, 3)))
-        first, warm, c = _times(value, *args)
-        print(f"{fidelity + ' 5 N':<28}{first:>14.3g}{warm:>12.3g}{float(c) * 1e3:>15.4f} mm/N")
-        first, warm, _ = _times(grad, *args)
-        print(f"{fidelity + ' 5 N gradient':<28}{first:>14.3g}{warm:>12.3g}")
+        first, warm, _ = _first_and_best(value, *args)
+        print(f"   {fidelity + ' 5 N path, jitted':<44}{first:>12.3g}{warm:>12.3g}")
+        first, warm, _ = _first_and_best(grad, *args)
+        print(f"   {fidelity + ' 5 N path, gradient (4 parameters)':<44}{first:>12.3g}{warm:>12.3g}")
+
+    def plain(thickness):
+        return dome_compliance(outer_radius=8 * mm, thickness=thickness, material=RESIN, max_force=5.0)
+
+    first, _, _ = _first_and_best(plain, 2 * mm)
+    start = time.perf_counter()
+    jax.block_until_ready(plain(2.1 * mm))
+    again = time.perf_counter() - start
+    print(f"   {'axisymmetric 5 N, plain call, new thickness':<44}{first:>12.3g}{again:>12.3g}")
+
+
+def default_design():
+    print("\n3. the default design (examples/dome_hall.toml)")
+    print(f"   {'dome level':<16}{'first (s)':>12}{'warm (s)':>12}{'steps':>7}  status")
+    for fidelity in ("reissner", "axisymmetric"):
+        problem, _ = problem_from_spec(default_spec(), fidelity=fidelity)
+        start = time.perf_counter()
+        solve(problem)
+        first = time.perf_counter() - start
+        warm = float("inf")
+        for _ in range(3):
+            start = time.perf_counter()
+            result = solve(problem)
+            warm = min(warm, time.perf_counter() - start)
+        print(f"   {fidelity:<16}{first:>12.3g}{warm:>12.3g}{result.steps:>7}  {result.status}")
 
 
 if __name__ == "__main__":
-    main()
+    mesh_convergence()
+    call_costs()
+    default_design()

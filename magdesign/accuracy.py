@@ -15,7 +15,7 @@ The cases:
 - elastomer layer: normal stiffness, Hooke against the bonded-layer correction, for
   discs of shape factor 0.25..2 (seed-004 Ecoflex, nu 0.49); one evaluation is one layer.
 - dome: secant compliance at 5 N of seed-001-like domes (R_o 8 mm, t = 1.5, 2, 2.5 mm),
-  Reissner and the axisymmetric model at three meshes against the finest mesh.
+  Reissner and the axisymmetric model at four meshes against the finest mesh.
 - default design: the parameters of the default design solved at each dome level, against
   the axisymmetric level (default mesh); error is the largest parameter move in metres (unit "m"), time is one solve.
 """
@@ -38,7 +38,7 @@ from magdesign.scene.effects import AreaAveraging
 from magdesign.units import mm, um
 
 REPEATS = 7
-DOME_MESHES = ((1, 8), (2, 16), (4, 32))
+DOME_MESHES = ((1, 12), (2, 12), (2, 16), (4, 32))
 AREA_POINTS_PER_SIDE = (1, 2, 4, 8)
 AREA_REFERENCE_POINTS = 16
 
