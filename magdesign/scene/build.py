@@ -241,6 +241,7 @@ def _film_scene(spec, fidelity):
     magnet.choice("shape", ("film",))
     period, thickness = magnet.quantity("period", "m"), magnet.quantity("thickness", "m")
     magnetization = magnet.quantity("magnetization", "T")
+    periods = magnet.integer("periods", default=None)  # None: an infinite film
     magnet.done()
     layer = _mechanics(spec, fidelity, models=("layer",))
     sensor = Table(spec, "sensor")
@@ -259,6 +260,7 @@ def _film_scene(spec, fidelity):
         hall=hall,
         effects=_hall_effects(spec, hall),
         grid=grid,
+        periods=periods,
     )
 
 
