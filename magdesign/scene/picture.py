@@ -49,6 +49,11 @@ def _extent(scene):
             half = max(half, 1.15 * float(scene.mechanics.outer_radius))
             top = max(top, float(scene.mechanics.outer_radius))
         low = min(0.0, float(np.min(positions[:, 2])))
+        for extra in scene.extra:  # further magnets: their enclosing spheres in the picture
+            size = float(np.hypot(extra.radius, extra.height / 2))
+            centre = np.asarray(extra.centre)
+            half = max(half, abs(float(centre[0])) + 1.5 * size)
+            top, low = max(top, float(centre[2]) + size), min(low, float(centre[2]) - size)
         margin = 0.25 * (top - low)
         return -half, half, low - margin, top + margin
     if isinstance(scene, FilmScene):

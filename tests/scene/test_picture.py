@@ -47,3 +47,14 @@ def test_every_kind_of_scene_draws(name, tmp_path):
     for axis in figure.axes[:2]:
         magnitude = _drawn(axis)[2]
         assert np.isfinite(magnitude).mean() > 0.2 and np.nanmin(magnitude) > 0  # the film: no field drawn above it
+
+
+def test_further_magnets_are_in_the_picture(tmp_path):
+    spec = example("dome_hall")
+    spec["magnet"]["fidelity"] = "exact"
+    spec["magnet"]["extra"] = [{"radius": "1 mm", "height": "2 mm", "polarization": ["0 T", "0 T", "1 T"], "position": ["15 mm", "0 mm", "-6 mm"], "moves": False}]
+    figure = plot_scene(scene_from_spec(spec), loads_from_spec(spec), tmp_path / "two.png")
+    for axis in figure.axes[:2]:
+        (x_min, x_max), (z_min, z_max) = axis.get_xlim(), axis.get_ylim()
+        assert x_max > 16 and z_min < -7  # mm: the fixed magnet's outline is inside
+        assert len(axis.patches) >= 3  # the two magnets and the dome
