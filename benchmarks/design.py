@@ -1,88 +1,183 @@
-"""Speed of the design solver on the default design (issue 5). Run by hand:
+"""Speed of the design solver on the default design, and its QP subproblem. Run by hand:
 
     .venv/bin/python benchmarks/design.py [--skip-axisymmetric]
 
-Prints: warm time of one solve at the Reissner and axisymmetric dome levels, a vmapped
-batch of 10,000 target compliances at the Reissner level, and the same batch solved the
-way a user would without magdesign (scipy.optimize.least_squares, magpylib for the field,
-the Reissner closed form for the dome), timed on a smaller batch and extrapolated.
+Prints:
+- the default design (the spec `magdesign solve` runs with no argument, its scene model):
+  first call (compile included) and the median warm time of one solve, at the Reissner
+  dome level and, unless skipped, the axisymmetric one;
+- a vmapped batch of 10,000 target compliances at the Reissner level, and the same
+  10,000 designs solved the usual way without magdesign: scipy's brentq on the same closed
+  forms (Reissner's dome compliance for the wall, seed 001 Eq. 1 on the axis for the gap
+  where the field limit is active), with the largest difference between the two answers;
+- the QP subproblem of the solver's first step on the default design and on hs071,
+  solved by magdesign's interior-point method and by jaxopt's BoxOSQP at three
+  tolerances: time, iterations, error of the step against an exact active-set solution,
+  and whether the active set read from its multipliers is right.
 """
 
+import importlib
 import sys
 import time
 
-import magpylib
+import jax
+import jax.numpy as jnp
+import jaxopt
 import numpy as np
-from scipy.optimize import least_squares
+from scipy.optimize import brentq
 
-from magdesign.design import default_problem, solve, sweep
+from magdesign.design import solve, sweep
+from magdesign.design.spec import default_spec, problem_from_spec
+from magdesign.mechanics import MooneyRivlin
 from magdesign.units import mm, mT
 
+sys.path.insert(0, "tests/design")
+from helpers_problems import HOCK_SCHITTKOWSKI  # noqa: E402
+
+solver = importlib.import_module("magdesign.design.solve")
+qp_module = importlib.import_module("magdesign.design._qp")
+
 BATCH = 10_000
-SCIPY_BATCH = 200
+# The default spec's numbers (magdesign/design/default.toml), for the scipy baseline.
+RADIUS, HEIGHT, REMANENCE = 1.5 * mm, 1.0 * mm, 1.17
+OUTER, FORCE, SATURATION = 8.0 * mm, 5.0, 4.8 * mT
+MATERIAL = MooneyRivlin(c10=0.1182e6, c01=0.1769e6)
 
 
-def warm_solve(fidelity, repeats):
-    problem = default_problem(fidelity)
+def table(rows):
+    widths = [max(len(str(r[i])) for r in rows) for i in range(len(rows[0]))]
+    for row in rows:
+        print("  ".join(str(cell).ljust(width) for cell, width in zip(row, widths)).rstrip())
+
+
+def timed_solves(problem, repeats):
     began = time.perf_counter()
     first = solve(problem)
-    compile_s = time.perf_counter() - began
+    first_s = time.perf_counter() - began
     times = []
     for _ in range(repeats):
         began = time.perf_counter()
-        result = solve(problem)
+        solve(problem)
         times.append(time.perf_counter() - began)
-    return first, result, compile_s, np.median(times)
+    return first, first_s, float(np.median(times))
 
 
-def scipy_design(compliance, model):
-    """Rest gap and thickness for one target compliance, the hand-written way."""
-    material = model.material
-    e, nu = float(material.youngs_modulus), float(material.poisson_ratio)
-    reissner = lambda t: (model.outer_radius - t / 2) * np.sqrt(3 * (1 - nu**2)) / (4 * e * t**2)  # noqa: E731
-    thickness = least_squares(lambda t: reissner(t[0]) / compliance - 1, [2 * mm], bounds=(1.5 * mm, 4 * mm)).x[0]
-    magnet = magpylib.magnet.Cylinder(
-        polarization=(0, 0, model.remanence), dimension=(2 * model.radius, model.height), position=(0, 0, 0)
+def scipy_designs(compliances):
+    """(gap, thickness) of each target compliance, by brentq on the same closed forms."""
+    e, nu = float(MATERIAL.youngs_modulus), float(MATERIAL.poisson_ratio)
+
+    def reissner(t):
+        return (OUTER - t / 2) * np.sqrt(3 * (1 - nu**2)) / (4 * e * t**2)
+
+    def bz(z):
+        return REMANENCE / 2 * ((HEIGHT + z) / np.hypot(RADIUS, HEIGHT + z) - z / np.hypot(RADIUS, z))
+
+    closest = brentq(lambda z: bz(z) - SATURATION, 0.1 * mm, 50 * mm, xtol=1e-16, rtol=1e-15)
+    gaps, thicknesses = [], []
+    for c in compliances:
+        thicknesses.append(brentq(lambda t: reissner(t) - c, 0.1 * mm, 8 * mm, xtol=1e-16, rtol=1e-15))
+        gaps.append(closest + c * FORCE)
+    return np.array(gaps), np.array(thicknesses)
+
+
+def design_rows(skip_axisymmetric):
+    rows = [("default design", "first call (s)", "warm (ms, median)", "status")]
+    levels = ["reissner"] + ([] if skip_axisymmetric else ["axisymmetric"])
+    for level in levels:
+        problem, _ = problem_from_spec(default_spec(), fidelity=level)
+        result, first_s, warm_s = timed_solves(problem, 200 if level == "reissner" else 3)
+        rows.append((f"solve, {level} dome", f"{first_s:.2f}", f"{warm_s * 1e3:.3f}", result.status))
+    table(rows)
+
+    problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
+    values = np.linspace(0.2, 0.45, BATCH) * mm
+    began = time.perf_counter()
+    sweep(problem, "compliance", values)
+    first_s = time.perf_counter() - began
+    batch = sweep(problem, "compliance", values)
+    began = time.perf_counter()
+    gaps, thicknesses = scipy_designs(values)
+    scipy_s = time.perf_counter() - began
+    print()
+    table(
+        [
+            ("10,000 compliances", "time (s)", "per design (us)", "note"),
+            ("magdesign sweep (vmap)", f"{batch.seconds:.3f}", f"{batch.seconds / BATCH * 1e6:.1f}",
+             f"first call {first_s:.1f} s; {batch.successful.mean() * 100:.1f} % successful"),
+            ("scipy brentq, same closed forms", f"{scipy_s:.3f}", f"{scipy_s / BATCH * 1e6:.1f}",
+             f"ratio scipy / magdesign {scipy_s / batch.seconds:.1f}"),
+        ]
     )
-    field = lambda z: magnet.getB((0, 0, model.height / 2 + z))[2]  # noqa: E731
-    closest = least_squares(lambda z: field(z[0]) / (4.8 * mT) - 1, [6 * mm], bounds=(0.5 * mm, 20 * mm)).x[0]
-    return closest + compliance * model.max_force, thickness
+    gap_error = np.max(np.abs(gaps / batch.parameters["geometry.gap"] - 1))
+    thickness_error = np.max(np.abs(thicknesses / batch.parameters["mechanics.thickness"] - 1))
+    print(f"largest relative difference, scipy vs magdesign: gap {gap_error:.1e}, thickness {thickness_error:.1e}")
+
+
+def first_subproblem(problem):
+    """The solver's QP at the start of ``problem`` (scaled as the solver scales it)."""
+    lower, upper, scale, start, theta = solver.problem_arrays(problem, np)
+    y0, y_max = (start - lower) / scale, (upper - lower) / scale
+    jet = solver._jet(problem, jnp.asarray(y0), jnp.asarray(theta))
+    weight = 1.0 / float(jnp.linalg.norm(jet.J[0])) if problem.objective is not None else 1.0
+    m = jet.v.shape[0] - 1
+    return solver.subproblem(jet, jnp.asarray(y0), jnp.asarray(y_max), jnp.zeros(m), weight, len(problem.targets),
+                             problem.objective is not None)
+
+
+def exact_qp(Q, q, A, b, G, h, active):
+    """The QP's solution with the given inequality rows held as equations (KKT system)."""
+    E = jnp.concatenate([A, G[active]])
+    rhs = jnp.concatenate([b, h[active]])
+    k = E.shape[0]
+    matrix = jnp.block([[Q, E.T], [E, jnp.zeros((k, k))]])
+    return jnp.linalg.lstsq(matrix, jnp.concatenate([-q, rhs]))[0][: Q.shape[0]]
+
+
+def median_time(fn, repeats=20):
+    jax.block_until_ready(fn())
+    times = []
+    for _ in range(repeats):
+        began = time.perf_counter()
+        jax.block_until_ready(fn())
+        times.append(time.perf_counter() - began)
+    return float(np.median(times))
+
+
+def qp_rows():
+    default, _ = problem_from_spec(default_spec(), fidelity="reissner")
+    hs071 = next(p for p in HOCK_SCHITTKOWSKI if p.name == "hs071").problem()
+    rows = [("QP of the first step", "solver", "time (ms)", "iterations", "step error", "active set")]
+    for name, problem in (("default design", default), ("hs071", hs071)):
+        Q, q, A, b, G, h = first_subproblem(problem)
+        ours = jax.jit(qp_module.solve_qp)
+        solution = ours(Q, q, A, b, G, h)
+        active = np.asarray(solution.z) > 1e-8
+        reference = exact_qp(Q, q, A, b, G, h, active)
+        seconds = median_time(lambda: ours(Q, q, A, b, G, h))
+        error = float(jnp.max(jnp.abs(solution.w - reference)))
+        rows.append((name, "magdesign interior point", f"{seconds * 1e3:.2f}", int(solution.iterations), f"{error:.1e}",
+                     "reference"))
+        stacked = jnp.concatenate([A, G])
+        lower_rows = jnp.concatenate([b, jnp.full(G.shape[0], -jnp.inf)])
+        upper_rows = jnp.concatenate([b, h])
+        for tol, maxiter in ((1e-3, 4000), (1e-6, 100_000), (1e-10, 100_000)):
+            osqp = jaxopt.BoxOSQP(tol=tol, maxiter=maxiter, jit=True)
+            run = jax.jit(lambda Q=Q, q=q: osqp.run(params_obj=(Q, q), params_eq=stacked, params_ineq=(lower_rows, upper_rows)))
+            out = run()
+            seconds = median_time(run, repeats=5)
+            w = out.params.primal[0]
+            # BoxOSQP's dual of the rows A x = z: positive where an upper bound is active.
+            z_osqp = np.asarray(out.params.dual_eq)[A.shape[0]:]
+            same = bool(np.all((z_osqp > 1e-8) == active))
+            rows.append(("", f"jaxopt BoxOSQP tol {tol:g}", f"{seconds * 1e3:.2f}", int(out.state.iter_num),
+                         f"{float(jnp.max(jnp.abs(w - reference))):.1e}", "right" if same else "wrong"))
+    table(rows)
 
 
 def main():
-    rows = []
-    first, result, compile_s, warm = warm_solve("reissner", 200)
-    rows.append(("solve, Reissner dome", f"{warm * 1e3:.3f} ms warm", f"first call {compile_s:.1f} s", result.status))
-    if "--skip-axisymmetric" not in sys.argv:
-        _, result_axi, compile_axi, warm_axi = warm_solve("axisymmetric", 5)
-        rows.append(
-            ("solve, axisymmetric dome", f"{warm_axi * 1e3:.3f} ms warm", f"first call {compile_axi:.1f} s",
-             f"{result_axi.status}, t = {result_axi.parameters['thickness'] / mm:.5f} mm")
-        )
-    problem = default_problem("reissner")
-    values = np.linspace(0.2, 0.45, BATCH) * mm
-    sweep(problem, "compliance", values)  # compile
-    batch = sweep(problem, "compliance", values)
-    rows.append(
-        ("vmap batch of 10,000 compliances", f"{batch.seconds:.3f} s", f"{batch.successful.mean() * 100:.1f} % solved",
-         f"{batch.seconds / BATCH * 1e6:.1f} us per design")
-    )
-    model = problem.model
-    began = time.perf_counter()
-    scipy_rows = [scipy_design(c, model) for c in values[:: BATCH // SCIPY_BATCH]]
-    scipy_s = (time.perf_counter() - began) * BATCH / SCIPY_BATCH
-    rows.append(
-        ("scipy least_squares + magpylib", f"{scipy_s:.1f} s (extrapolated)", f"timed on {SCIPY_BATCH} designs",
-         f"ratio scipy / magdesign batch = {scipy_s / batch.seconds:.0f}")
-    )
-    gaps = np.array([g for g, _ in scipy_rows])
-    agree = np.max(np.abs(gaps / batch.parameters["gap"][:: BATCH // SCIPY_BATCH] - 1))
-    rows.append(("max relative gap difference", f"{agree:.1e}", "scipy/magpylib vs magdesign", ""))
-    widths = [max(len(str(r[i])) for r in rows) for i in range(4)]
-    for row in rows:
-        print("  ".join(str(cell).ljust(width) for cell, width in zip(row, widths)))
-    print(f"default design: rest gap {first.parameters['gap'] / mm:.4f} mm, closest {first.outputs['closest_gap'] / mm:.4f} mm,"
-          f" thickness {first.parameters['thickness'] / mm:.5f} mm (Reissner)")
+    design_rows("--skip-axisymmetric" in sys.argv)
+    print()
+    qp_rows()
 
 
 if __name__ == "__main__":

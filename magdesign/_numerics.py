@@ -69,19 +69,27 @@ def safe_log(x, at_zero=0.0):
 DESIGN_RTOL = 1e-10
 # Default step tolerance in scaled variables: a converged step in a [0, 1] box.
 DESIGN_ATOL = 1e-13
-# Quadratic-penalty weight on scaled residuals, the objective being scaled to a unit gradient:
-# the penalty phase only finds the active set (its answer is off by about 1 / DESIGN_PENALTY,
-# which the exact polish removes); a larger weight makes its merit function too steep to
-# cross quickly.
-DESIGN_PENALTY = 1e4
-# A limit closer to active than this after the penalty phase (10 times its typical error)
-# is tried as active by the exact polish, which drops it again if its multiplier has the
-# wrong sign.
-DESIGN_ACTIVE_TOL = 1e-3
-# Levenberg-Marquardt damping, relative to the largest curvature: first value and the cap
-# beyond which a search counts as stalled.
-DESIGN_DAMPING_START = 1e-3
-DESIGN_DAMPING_MAX = 1e10
+# Sequential quadratic programming (design solver). The objective is scaled to a unit
+# gradient at the start and the constraints to their targets, so multipliers are O(1)-O(100):
+# - the cost per unit of an elastic slack of the QP (a target or limit row relaxed where
+#   its linearisation cannot be met): far above any multiplier, so that a linearisation
+#   that can be met is met exactly;
+DESIGN_ELASTIC = 1e6
+# - the smallest eigenvalue of the QP's Hessian, relative to its largest (plus 1): the
+#   Hessian of the Lagrangian with its eigenvalues' moduli, made definite by this floor
+#   (which bounds a step where the model is flat to 1e4 box widths, so the QP's own
+#   1e-12 residuals move it by 1e-8 at most);
+DESIGN_HESSIAN_FLOOR = 1e-4
+# - a limit row or bound is active where its QP multiplier exceeds this (with an
+#   objective), or where the step ends within DESIGN_ON_CONSTRAINT of it (without one);
+DESIGN_ACTIVE_MULTIPLIER = 1e-8
+DESIGN_ON_CONSTRAINT = 1e-9
+# - negative curvature of the Lagrangian on the active constraints' null space below
+#   -DESIGN_CURVATURE_TOL (relative to its largest curvature, plus 1) means a stationary
+#   point is no minimum; the search leaves it along that direction at most
+#   DESIGN_ESCAPES times.
+DESIGN_CURVATURE_TOL = 1e-7
+DESIGN_ESCAPES = 4
 
 
 # Width of the smoothed contact ramp, as a fraction of the length it is applied to (the

@@ -5,15 +5,21 @@ import numpy as np
 
 from magdesign.units import convert
 
-# The solver's outcomes; optimistix RESULTS names where one fits.
-STATUS_NAMES = (
-    "successful",
-    "infeasible_target",
-    "limit_violated",
-    "max_steps_reached",
-    "nonfinite",
-    "mechanics_not_converged",
-)
+
+class DesignStatus(eqx.Enumeration):
+    """The design solver's outcomes, in its order of precedence (the first that applies)."""
+
+    successful = "every target met, every limit held, a local optimum to first and second order"
+    nonfinite = "the model gave NaN or inf at the start or at the end"
+    mechanics_not_converged = "a solver inside the model (e.g. the dome's) did not converge at the end"
+    infeasible_target = "a target is not met: no point near the end meets it (see violated)"
+    limit_violated = "a limit is broken at the end (see violated)"
+    not_a_minimum = "a stationary point that the objective can leave along a direction of negative curvature"
+    max_steps_reached = "the search or its polish did not converge in max_steps"
+
+
+# The statuses' names by code, the one source of the names in JSON, tables and exit codes.
+STATUS_NAMES = tuple(DesignStatus._name_to_item)
 
 
 def _keys(problem):
@@ -31,9 +37,10 @@ class DesignResult(eqx.Module):
     """One solved design (SI values, Python floats).
 
     Attributes:
-        status: "successful", or why not: "infeasible_target" (see ``violated``),
-            "limit_violated", "max_steps_reached", "nonfinite", "mechanics_not_converged"
-            (a solver inside the model, e.g. the dome's, did not converge at the end).
+        status: the name of a :class:`DesignStatus`: "successful", or why not:
+            "nonfinite", "mechanics_not_converged" (a solver inside the model, e.g. the
+            dome's, did not converge at the end), "infeasible_target" (see ``violated``),
+            "limit_violated", "not_a_minimum", "max_steps_reached".
         parameters: {variable: value}.
         targets: {output: {"target": value, "achieved": value}}.
         limits: {output: {"upper" and/or "lower": bound, "achieved": value, "active": bool}}.

@@ -1,28 +1,37 @@
 """The design solver: bounded, constrained, exact, with implicit derivatives.
 
-optimistix's least-squares and minimise solvers take no bounds, so the search is ours;
-it works on variables scaled to their bound width, y = (x - lower) / scale in [0, y_max]:
+The search works on variables scaled to their bound width, y = (x - lower) / scale in
+[0, y_max], the objective scaled to a unit gradient at the start and each constraint row
+to its target or limit. It has two stages:
 
-1. feasibility: projected Levenberg-Marquardt (Gauss-Newton) on the scaled target
-   residuals and limit violations, variables clipped to their box;
-2. with an objective: projected damped Newton on the objective (scaled to a unit
-   gradient) plus a quadratic penalty of phase 1's residuals; this finds which limits and
-   bounds are active;
-3. exact polish (active set): Newton on the KKT system of the targets, the active limits
-   as equations and the active bounds as fixed variables, then a check of the
-   multipliers' signs, the inactive limits and the box, repeated while the set changes.
-
-At the solution the KKT residual R(z, theta) = 0 holds for z = (y, multipliers) and theta =
-(target values, limit bounds), so the implicit function theorem gives
-dz/dtheta = -R_z^+ R_theta (pseudo-inverse, which is the minimum-norm answer where no
-objective picks one point of a manifold of solutions).
+1. sequential quadratic programming (ours): at each accepted point the quadratic model
+   (the Hessian of the Lagrangian, made definite by taking its eigenvalues' moduli) is
+   minimised subject to the linearised targets and limits and the box, with elastic
+   slacks so that the subproblem is always feasible (:mod:`magdesign.design._qp`); a
+   backtracking line search on the exact l1 merit function f + nu |violation|_1 accepts
+   the step. Where the step vanishes the point is stationary; "successful" then also
+   needs the reduced Hessian of the Lagrangian on the null space of the active
+   constraints to be positive semi-definite, and a point that fails it is left along its
+   direction of negative curvature (at most DESIGN_ESCAPES times, then "not_a_minimum").
+   This stage is ours because it chooses the active set, which no JAX library does:
+   optimistix's solvers take no constraints or bounds, and jaxopt's bounded QP (BoxOSQP)
+   is too inexact for it (measured in benchmarks/design.py).
+2. exact polish (optimistix): with the active set of the last subproblem, the KKT system
+   (stationarity on the free variables, targets and active limits as equations, active
+   bounds as fixed variables) is solved by ``optimistix.root_find`` (Newton); a problem
+   without objective is a feasibility problem, whose equations (targets, active limits,
+   fixed variables; in general fewer than the unknowns) go to ``optimistix.root_find``
+   too, where Newton through an SVD is Gauss-Newton with minimum-norm steps (see
+   :func:`_polish` for why not ``optimistix.least_squares``). Both use lineax's SVD,
+   which gives the minimum-norm step where the Jacobian is rank-deficient (degenerate
+   active sets, manifolds of solutions), and ``optimistix.ImplicitAdjoint``, whose
+   derivatives (forward mode, with respect to the target values and limit bounds) are
+   the optimum's implicit derivatives.
 
 Everything after the Python-level unpacking is one jitted, vmappable function of a fixed
-problem structure; the outcome is a status code, never an exception. The three phases run
-as one loop (see :func:`_core`) whose body evaluates the model's jet (values, Jacobian,
-Hessians) once, at the point it proposes: the model is traced once in the whole program,
-so XLA compiles one copy of the model, not one per phase, and the outputs and the implicit
-derivatives reuse the last jet.
+problem structure; the outcome is a :class:`DesignStatus`, never an exception. The search
+is one loop whose body evaluates the model's jet (values, Jacobian, Hessians) once, at the
+point it tries, so XLA compiles one copy of the model for the search.
 """
 
 import functools
@@ -31,34 +40,34 @@ import time
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import lineax as lx
 import numpy as np
+import optimistix as optx
 from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
 from magdesign._numerics import (
-    DESIGN_ACTIVE_TOL,
+    DESIGN_ACTIVE_MULTIPLIER,
     DESIGN_ATOL,
-    DESIGN_DAMPING_MAX,
-    DESIGN_DAMPING_START,
-    DESIGN_PENALTY,
+    DESIGN_CURVATURE_TOL,
+    DESIGN_ELASTIC,
+    DESIGN_ESCAPES,
+    DESIGN_HESSIAN_FLOOR,
+    DESIGN_ON_CONSTRAINT,
     DESIGN_RTOL,
     DESIGN_START_NUDGE,
     safe_div,
 )
+from magdesign.design._qp import solve_qp
 from magdesign.design.problem import Problem
-from magdesign.design.report import STATUS_NAMES, DesignResult, DesignSweep
+from magdesign.design.report import DesignResult, DesignStatus, DesignSweep
 
-# Status codes of the core, indices into STATUS_NAMES.
-(SUCCESSFUL, INFEASIBLE_TARGET, LIMIT_VIOLATED, MAX_STEPS_REACHED, NONFINITE, MECHANICS_NOT_CONVERGED) = range(6)
-_DAMPING_DOWN = 3.0
-_DAMPING_UP = 4.0
-# Rounds of the active-set polish: each adds or drops constraints found wrong by the last.
-_ACTIVE_SET_ROUNDS = 4
-# Inner rounds of a penalty step that settle which limit rows the step will violate.
-_HINGE_ROUNDS = 3
+# Armijo's sufficient-decrease fraction of the line search, and the shortest step it tries.
+_ARMIJO = 1e-4
+_SHORTEST_STEP = 1e-12
 
 
 class Settings(eqx.Module):
-    """Solver settings: tolerances on scaled quantities and the steps allowed per phase."""
+    """Solver settings: tolerances on scaled quantities and the steps allowed per stage."""
 
     rtol: Float[Array, ""]
     atol: Float[Array, ""]
@@ -113,7 +122,11 @@ def _evaluate(problem: Problem, y, theta):
         limit = problem.limits[i]
         excess = outputs[limit.output] - theta[n_targets + k]
         rows.append((excess if side == "upper" else -excess) / limit.scale)
-    c = jnp.stack(rows) if rows else jnp.zeros((0,))
+    # A problem without targets and limits gets one limit row that never binds (-1 <= 0):
+    # with zero-size rows, jax 0.10 lowers some LAPACK calls of the solver as untyped
+    # custom calls that XLA cannot run ("No registered implementation for untyped custom
+    # call to lapack_dgesdd_ffi"). _core drops the row again.
+    c = jnp.stack(rows) if rows else jnp.full((1,), -1.0)
     objective = problem.objective
     if objective is None:
         f = jnp.zeros(())
@@ -122,16 +135,11 @@ def _evaluate(problem: Problem, y, theta):
     return outputs, c, f
 
 
-def _violation(c, n_targets):
-    """Penalty residuals: the target residuals and the limit rows' excess over 0."""
-    return jnp.concatenate([c[:n_targets], jnp.maximum(c[n_targets:], 0.0)])
-
-
 class Jet(eqx.Module):
     """The model at one scaled point y, m constraint rows and n variables.
 
-    ``v`` = (weighted objective f, constraint rows c...) (1 + m,), scaled as in
-    :func:`_evaluate`; ``J`` (1 + m, n) and ``H`` (1 + m, n, n) its first and second
+    ``v`` = (objective f, constraint rows c...) (1 + m,), scaled as in :func:`_evaluate`
+    (f unweighted); ``J`` (1 + m, n) and ``H`` (1 + m, n, n) its first and second
     derivatives in y; ``outputs`` (k,) the model outputs named by ``Problem.outputs`` (SI).
     """
 
@@ -141,101 +149,275 @@ class Jet(eqx.Module):
     outputs: Float[Array, " k"]
 
 
-def _jet(problem, y, theta) -> Jet:
-    """The :class:`Jet` at y from one trace of the model (forward over forward mode)."""
+def _values(problem, y, theta):
+    """(v, outputs) at y: (objective, constraint rows...) and the named outputs."""
+    outputs, c, f = _evaluate(problem, y, theta)
+    return jnp.concatenate([f[None], c]), jnp.stack([outputs[name] for name in problem.outputs])
+
+
+def _first_jet(problem, y, theta):
+    """(J, (v, outputs)) at y: the model's first derivatives, by forward mode."""
 
     def values(y):
-        outputs, c, f = _evaluate(problem, y, theta)
-        v = jnp.concatenate([f[None], c])
-        return v, (v, jnp.stack([outputs[name] for name in problem.outputs]))
+        v, outputs = _values(problem, y, theta)
+        return v, (v, outputs)
+
+    return jax.jacfwd(values, has_aux=True)(y)
+
+
+def _jet(problem, y, theta) -> Jet:
+    """The :class:`Jet` at y from one trace of the model (forward over forward mode)."""
+    if problem.objective is None:
+        # Without an objective the search's Hessian is the floor alone (see _step), so
+        # tracing no second derivatives keeps models with costly kernels quick to compile.
+        J, (v, outputs) = _first_jet(problem, y, theta)
+        return Jet(v, J, jnp.zeros((*J.shape, y.shape[0])), outputs)
 
     def first(y):
-        J, (v, outputs) = jax.jacfwd(values, has_aux=True)(y)
+        J, (v, outputs) = _first_jet(problem, y, theta)
         return J, (J, v, outputs)
-
-    if problem.objective is None:
-        # Without an objective every multiplier is 0 at the solution, so the Lagrangian's
-        # curvature (multipliers times H) vanishes: first derivatives suffice, and tracing
-        # no second ones keeps models with costly kernels quick to compile.
-        J, (_, v, outputs) = first(y)
-        return Jet(v, J, jnp.zeros((*J.shape, y.shape[0])), outputs)
 
     H, (J, v, outputs) = jax.jacfwd(first, has_aux=True)(y)
     return Jet(v, J, H, outputs)
 
 
-def _merit(jet, weight, penalty, n_targets):
-    """The penalty merit w f + penalty/2 |violation(c)|^2 at a jet, and its gradient in y."""
-    violation = _violation(jet.v[1:], n_targets)
-    value = weight * jet.v[0] + 0.5 * penalty * jnp.dot(violation, violation)
-    return value, weight * jet.J[0] + penalty * jet.J[1:].T @ violation
+def _lagrangian_hessian(jet, multipliers, weight):
+    """(n, n) Hessian of weight f + multipliers . c in y."""
+    return weight * jet.H[0] + jnp.einsum("i,ijk->jk", multipliers, jet.H[1:])
 
 
-def _penalty_step(jet, y, y_max, weight, penalty, damping, relative_damping, n_targets):
-    """A step of ``min w f(y) + penalty/2 |violation(c(y))|^2`` over 0 <= y <= y_max.
-
-    The step minimises the model: f to second order, c linearised (Gauss-Newton), plus
-    damping. The hinge max(0, c + J d) of a limit row is kept piecewise exact by a few
-    inner rounds that include exactly the rows the step is predicted to violate: without
-    them a step from the feasible side cannot see a limit coming and overshoots it, and
-    the search creeps along the kink. Variables on a bound whose merit gradient points out
-    of the box are frozen. The damping is relative to the largest curvature in least
-    squares (Marquardt) and absolute with an objective, whose gradient is scaled to 1
-    while the penalty curvature is huge. Returns the step (n,).
-    """
-    _, gradient = _merit(jet, weight, penalty, n_targets)
-    f_grad, f_hess, c, J = weight * jet.J[0], weight * jet.H[0], jet.v[1:], jet.J[1:]
-    free = ~(((y <= 0.0) & (gradient > 0.0)) | ((y >= y_max) & (gradient < 0.0)))
-    both_free = free[:, None] & free[None, :]
-    is_target = jnp.arange(c.shape[0]) < n_targets
-
-    def hinge_round(rows, _):
-        J_rows = jnp.where(rows[:, None], J, 0.0)
-        H = f_hess + penalty * J_rows.T @ J_rows
-        curvature = jnp.where(relative_damping, jnp.max(jnp.abs(jnp.diag(H))) + 1.0, 1.0)
-        A = jnp.where(both_free, H, 0.0) + jnp.diag(jnp.where(free, damping * curvature, 1.0))
-        rhs = jnp.where(free, f_grad + penalty * J_rows.T @ jnp.where(rows, c, 0.0), 0.0)
-        delta = jnp.linalg.solve(A, -rhs)
-        delta = jnp.where(jnp.isfinite(delta) & free, delta, 0.0)
-        return is_target | (c + J @ delta > 0.0), delta
-
-    _, deltas = jax.lax.scan(hinge_round, is_target | (c > 0.0), None, length=_HINGE_ROUNDS)
-    return deltas[-1]
+def _violation(c, n_targets):
+    """l1 violation: |target rows| + positive parts of the limit rows."""
+    return jnp.sum(jnp.abs(c[:n_targets])) + jnp.sum(jnp.maximum(c[n_targets:], 0.0))
 
 
-def _kkt(z, active, jet, y_max, f_weight, n_targets):
-    """KKT residual R of the active set and its Jacobian dR/dz, z = (y, multipliers).
+def _merit(jet, weight, nu, n_targets):
+    """The exact l1 merit function weight f + nu |violation|_1 at a jet."""
+    return weight * jet.v[0] + nu * _violation(jet.v[1:], n_targets)
 
-    Rows: stationarity of the Lagrangian on free variables (fixed ones: y - bound), then
-    the targets and active limit rows as equations (inactive ones: multiplier = 0).
-    Returns (R, dR/dz, stationarity, c).
-    """
-    active_limits, at_lower, at_upper = active
-    v, J, H = jet.v, jet.J, jet.H
-    n = y_max.shape[0]
-    y, multipliers = z[:n], z[n:]
-    c, J_c = v[1:], J[1:]
+
+class _Step(eqx.Module):
+    """The subproblem's answer at a point: step d (n,), multipliers (m,) of the constraint
+    rows and (n,) of the lower and upper bounds, the l1 violation of the linearised rows
+    after the step, and the active set it implies."""
+
+    d: Float[Array, " n"]
+    multipliers: Float[Array, " m"]
+    linear_violation: Float[Array, ""]
+    active_limits: Bool[Array, " l"]
+    at_lower: Bool[Array, " n"]
+    at_upper: Bool[Array, " n"]
+
+
+def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective):
+    """The QP of one step at y, as (Q, q, A, b, G, h) for :func:`solve_qp`: minimise the
+    quadratic model of the Lagrangian subject to the linearised rows and the box, each
+    target row relaxed by two elastic slacks and each limit row by one, costing
+    DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits). Without an objective
+    the quadratic term is |d|^2 / 2 (the minimum-norm step of Gauss-Newton)."""
+    n = y.shape[0]
+    c, J_c = jet.v[1:], jet.J[1:]
     m = c.shape[0]
-    stationarity = f_weight * J[0] + J_c.T @ multipliers
-    hessian = f_weight * H[0] + jnp.einsum("i,ijk->jk", multipliers, H[1:])
-    fixed = at_lower | at_upper
-    equations = jnp.concatenate([jnp.ones(n_targets, bool), active_limits])
-    r_y = jnp.where(at_lower, y, jnp.where(at_upper, y - y_max, stationarity))
-    r_c = jnp.where(equations, c, multipliers)
-    top = jnp.concatenate([jnp.where(fixed[:, None], jnp.eye(n), hessian), jnp.where(fixed[:, None], 0.0, J_c.T)], 1)
-    bottom = jnp.concatenate(
-        [jnp.where(equations[:, None], J_c, 0.0), jnp.where(equations[:, None], 0.0, jnp.eye(m))], 1
+    n_limits = m - n_targets
+    eigenvalues, vectors = jnp.linalg.eigh(_lagrangian_hessian(jet, multipliers, weight))
+    moduli = jnp.abs(eigenvalues)
+    moduli = jnp.maximum(moduli, DESIGN_HESSIAN_FLOOR * (1.0 + jnp.max(moduli)) if has_objective else 1.0)
+    n_slack = 2 * n_targets + n_limits
+    nw = n + n_slack
+    Q = jnp.zeros((nw, nw)).at[:n, :n].set((vectors * moduli) @ vectors.T)
+    q = jnp.concatenate([weight * jet.J[0], jnp.full(n_slack, DESIGN_ELASTIC)])
+    eye_t, eye_l = jnp.eye(n_targets), jnp.eye(n_limits)
+    A = jnp.concatenate([J_c[:n_targets], -eye_t, eye_t, jnp.zeros((n_targets, n_limits))], axis=1)
+    G = jnp.concatenate(
+        [
+            jnp.concatenate([J_c[n_targets:], jnp.zeros((n_limits, 2 * n_targets)), -eye_l], axis=1),
+            jnp.concatenate([jnp.eye(n), jnp.zeros((n, n_slack))], axis=1),
+            jnp.concatenate([-jnp.eye(n), jnp.zeros((n, n_slack))], axis=1),
+            jnp.concatenate([jnp.zeros((n_slack, n)), -jnp.eye(n_slack)], axis=1),
+        ]
     )
-    return jnp.concatenate([r_y, r_c]), jnp.concatenate([top, bottom]), stationarity, c
+    h = jnp.concatenate([-c[n_targets:], y_max - y, y, jnp.zeros(n_slack)])
+    return Q, q, A, -c[:n_targets], G, h
 
 
-def _theta_slopes(problem):
-    """dc/dtheta of each constraint row (diagonal): -1/scale for targets and upper
-    limits, +1/scale for lower limits."""
-    slopes = [-1.0 / t.scale for t in problem.targets] + [
-        (-1.0 if side == "upper" else 1.0) / problem.limits[i].scale for i, side in problem.limit_rows
-    ]
-    return jnp.stack(slopes) if slopes else jnp.zeros((0,))
+def _step(jet, y, y_max, multipliers, weight, n_targets, has_objective):
+    """The :func:`subproblem`'s solution at y. With an objective the active set is the
+    rows and bounds with a positive multiplier; without one the multipliers say nothing,
+    and it is the rows and bounds that the step ends on. Returns the :class:`_Step` and
+    the bounds' multipliers (2n,): lower, then upper."""
+    n = y.shape[0]
+    c, J_c = jet.v[1:], jet.J[1:]
+    n_limits = c.shape[0] - n_targets
+    qp = solve_qp(*subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective))
+    # A subproblem that failed (non-finite) offers no step; the polish then judges the point.
+    qp = jax.tree.map(lambda a: jnp.where(jnp.isfinite(a), a, 0.0) if a.dtype == jnp.float64 else a, qp)
+    d = qp.w[:n]
+    limit_multipliers, upper_multipliers, lower_multipliers = jnp.split(qp.z[: n_limits + 2 * n], [n_limits, n_limits + n])
+    linearised = c + J_c @ d
+    if has_objective:
+        active = (limit_multipliers, lower_multipliers, upper_multipliers)
+        active_limits, at_lower, at_upper = (multiplier > DESIGN_ACTIVE_MULTIPLIER for multiplier in active)
+    else:
+        active_limits = linearised[n_targets:] >= -DESIGN_ON_CONSTRAINT
+        at_lower, at_upper = y + d <= DESIGN_ON_CONSTRAINT, y + d >= y_max - DESIGN_ON_CONSTRAINT
+    return _Step(
+        d=d,
+        multipliers=jnp.concatenate([qp.y, limit_multipliers]),
+        linear_violation=_violation(linearised, n_targets),
+        active_limits=active_limits,
+        at_lower=at_lower,
+        at_upper=at_upper,
+    ), jnp.concatenate([lower_multipliers, upper_multipliers])
+
+
+def _least_curvature(jet, step: _Step, bound_multipliers, weight, n_targets):
+    """(e, v): the least eigenvalue e of the Hessian of the Lagrangian on the null space
+    of the strongly active constraints (targets, limits and bounds with a positive
+    multiplier), relative to the Hessian's largest eigenvalue modulus (plus 1), and its
+    eigenvector v (n,), scaled to a largest entry of 1."""
+    n = jet.J.shape[1]
+    hessian = _lagrangian_hessian(jet, step.multipliers, weight)
+    strong = step.multipliers > DESIGN_ACTIVE_MULTIPLIER
+    strong = strong.at[:n_targets].set(True)
+    lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
+    rows = jnp.concatenate([jnp.where(strong[:, None], jet.J[1:], 0.0), jnp.where((lower | upper)[:, None], jnp.eye(n), 0.0)])
+    _, singular, vt = jnp.linalg.svd(rows, full_matrices=True)  # (n,) singular values: rows has m + n >= n
+    null = singular <= 1e-9 * jnp.max(singular, initial=0.0)
+    basis = vt.T * null  # (n, n), columns outside the null space zeroed
+    eigenvalues, vectors = jnp.linalg.eigh(basis.T @ hessian @ basis)
+    size = 1.0 + jnp.max(jnp.abs(jnp.linalg.eigvalsh(hessian)))
+    v = basis @ vectors[:, 0]
+    return eigenvalues[0] / size, v / jnp.maximum(jnp.max(jnp.abs(v)), 1e-300)
+
+
+def _room(y, v, y_max):
+    """The largest a in [0, 1] with y + a v inside the box."""
+    ratios = jnp.where(v > 0, (y_max - y) / jnp.where(v > 0, v, 1.0), jnp.where(v < 0, -y / jnp.where(v < 0, v, 1.0), jnp.inf))
+    return jnp.clip(jnp.min(ratios), 0.0, 1.0)
+
+
+# Phases of the search. Each iteration tries one point and evaluates the model's jet there
+# once; the loop stops at the first phase from CONVERGED on, each an end of the search.
+START, SEARCH, ESCAPE, CONVERGED, STALLED, NOT_MINIMUM, NONFINITE_START = range(7)
+
+
+class _State(eqx.Module):
+    """The search's state (scaled variables). ``y`` is the accepted point, ``jet`` the
+    model there, ``step`` the subproblem's answer at y, ``direction`` the line searched
+    (the step, or a direction of negative curvature), ``alpha`` the fraction of it tried
+    next; the line search asks for a merit below ``merit + ARMIJO (alpha slope + alpha^2
+    curvature)``. ``nu`` is the merit's penalty, ``weight`` the objective's scale."""
+
+    phase: Int[Array, ""]
+    y: Float[Array, " n"]
+    jet: Jet
+    step: _Step
+    bound_multipliers: Float[Array, " 2n"]
+    direction: Float[Array, " n"]
+    alpha: Float[Array, ""]
+    merit: Float[Array, ""]
+    slope: Float[Array, ""]
+    curvature: Float[Array, ""]
+    nu: Float[Array, ""]
+    weight: Float[Array, ""]
+    escapes: Int[Array, ""]
+    nudged: Bool[Array, ""]
+    steps: Int[Array, ""]
+
+
+def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
+    """Sequential quadratic programming from y0 (see the module docstring), as one loop."""
+    n, n_targets = y0.shape[0], len(problem.targets)
+    m = max(n_targets + len(problem.limit_rows), 1)  # with _evaluate's row that never binds
+    xtol = jnp.sqrt(settings.atol)
+
+    def accept(state, y, jet):
+        """Take y as the new point: solve the subproblem there and choose what comes next."""
+        step, bound_multipliers = _step(
+            jet, y, y_max, state.step.multipliers, state.weight, n_targets, problem.objective is not None
+        )
+        nu = jnp.maximum(state.nu, 2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0))
+        gradient = state.weight * jet.J[0]
+        # The merit's directional derivative along the step; never above 0, so that a
+        # step which is no descent direction (an inexact subproblem) is taken only downhill.
+        slope = jnp.dot(gradient, step.d) - nu * (_violation(jet.v[1:], n_targets) - step.linear_violation)
+        slope = jnp.minimum(slope, 0.0)
+        stationary = jnp.max(jnp.abs(step.d)) <= xtol
+        curvature, v = _least_curvature(jet, step, bound_multipliers, state.weight, n_targets)
+        # Leave a saddle downhill (or, where flat, towards the side with more room).
+        v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
+        v = jnp.where((jnp.dot(gradient, v) == 0.0) & (_room(y, -v, y_max) > _room(y, v, y_max)), -v, v)
+        saddle = stationary & (curvature < -DESIGN_CURVATURE_TOL) & (problem.objective is not None)
+        escape = saddle & (state.escapes < DESIGN_ESCAPES) & (_room(y, v, y_max) > 0.0)
+        phase = jnp.select([escape, saddle, stationary], [ESCAPE, NOT_MINIMUM, CONVERGED], SEARCH)
+        return eqx.tree_at(
+            lambda s: (s.phase, s.y, s.jet, s.step, s.bound_multipliers, s.direction, s.alpha, s.merit, s.slope,
+                       s.curvature, s.nu, s.escapes),
+            state,
+            (
+                phase,
+                y,
+                jet,
+                step,
+                bound_multipliers,
+                jnp.where(escape, _room(y, v, y_max) * v, step.d),
+                jnp.asarray(1.0),
+                _merit(jet, state.weight, nu, n_targets),
+                jnp.where(escape, jnp.dot(gradient, v), slope),
+                jnp.where(escape, 0.5 * curvature, 0.0),
+                nu,
+                state.escapes + escape,
+            ),
+        )
+
+    def body(state):
+        start = state.phase == START
+        trial = jnp.where(start, state.y, jnp.clip(state.y + state.alpha * state.direction, 0.0, y_max))
+        jet = _jet(problem, trial, theta)
+        finite = jnp.all(jnp.isfinite(jet.v)) & jnp.all(jnp.isfinite(jet.J)) & jnp.all(jnp.isfinite(jet.H))
+        state = eqx.tree_at(lambda s: s.steps, state, state.steps + 1)
+
+        # START: a start where the model is flat in every direction (the centre of a
+        # symmetric design) offers no step at all: move it once a little into the box, by
+        # a different amount per variable; otherwise scale the objective and accept it.
+        flat = start & ~state.nudged & jnp.all(jet.J == 0.0)
+        inward = jnp.where(trial > 0.5 * y_max, -1.0, 1.0)
+        nudge = inward * DESIGN_START_NUDGE * y_max * (1.0 + jnp.arange(n)) / n
+        nudged = eqx.tree_at(lambda s: (s.y, s.nudged), state, (trial + nudge, jnp.asarray(True)))
+        scaled = eqx.tree_at(lambda s: s.weight, state, safe_div(1.0, jnp.linalg.norm(jet.J[0]), at_zero=1.0))
+        accepted = accept(_pick(start, scaled, state), trial, jet)
+        not_started = eqx.tree_at(lambda s: s.phase, state, jnp.asarray(NONFINITE_START))
+
+        # SEARCH, ESCAPE: Armijo's test on the merit, else a shorter step.
+        alpha = state.alpha
+        wanted = state.merit + _ARMIJO * (alpha * state.slope + alpha**2 * state.curvature)
+        good = finite & (_merit(jet, state.weight, state.nu, n_targets) <= wanted)
+        shorter = eqx.tree_at(lambda s: s.alpha, state, 0.5 * alpha)
+        given_up = jnp.where(state.phase == ESCAPE, NOT_MINIMUM, STALLED)
+        failed = eqx.tree_at(lambda s: s.phase, shorter, given_up)
+        searched = _pick(good, accepted, _pick(0.5 * alpha < _SHORTEST_STEP, failed, shorter))
+        return _pick(start, _pick(flat, nudged, _pick(finite, accepted, not_started)), searched)
+
+    blank_jet = Jet(jnp.zeros(1 + m), jnp.zeros((1 + m, n)), jnp.zeros((1 + m, n, n)), jnp.zeros(len(problem.outputs)))
+    no = lambda size: jnp.zeros(size, bool)  # noqa: E731
+    state = _State(
+        phase=jnp.asarray(START),
+        y=y0,
+        jet=blank_jet,
+        step=_Step(jnp.zeros(n), jnp.zeros(m), jnp.zeros(()), no(m - n_targets), no(n), no(n)),
+        bound_multipliers=jnp.zeros(2 * n),
+        direction=jnp.zeros(n),
+        alpha=jnp.asarray(1.0),
+        merit=jnp.zeros(()),
+        slope=jnp.zeros(()),
+        curvature=jnp.zeros(()),
+        nu=jnp.asarray(1.0),
+        weight=jnp.asarray(1.0),
+        escapes=jnp.asarray(0),
+        nudged=jnp.asarray(False),
+        steps=jnp.asarray(0),
+    )
+    return jax.lax.while_loop(lambda s: (s.phase < CONVERGED) & (s.steps < settings.max_steps), body, state)
 
 
 def _pick(condition, new, old):
@@ -243,238 +425,131 @@ def _pick(condition, new, old):
     return jax.tree.map(lambda a, b: jnp.where(condition, a, b), new, old)
 
 
-# Phases of the core's loop; each iteration proposes a point, evaluates the model's jet
-# there once, and then accepts or refuses it and moves between phases. RESTART takes the
-# start back after a non-finite end; the loop stops at DONE or FAILED (that restart done).
-START, FEASIBILITY, PENALTY, NEWTON, REEVALUATE, RESTART, DONE, FAILED = range(8)
-# Which proposal and update each phase uses: 0 penalty step, 1 KKT Newton step, 2 stay.
-_BRANCH_OF_PHASE = (2, 0, 0, 1, 2, 2, 2, 2)
+class _Active(eqx.Module):
+    """The active set of the polish: limit rows held as equations, variables fixed on a bound."""
 
-
-class _State(eqx.Module):
-    """The core's loop state (scaled variables; m constraint rows, l limit rows).
-
-    ``z`` = (y, multipliers) with ``jet`` the model's jet at y. ``weight`` of the objective is 0 until the
-    penalty phase scales it to a unit gradient. ``count`` counts the steps of the current
-    phase (or Newton round), ``steps`` those of all phases; ``active_limits``, ``at_lower``,
-    ``at_upper`` are the active set of the Newton rounds, ``changed`` whether the last
-    round changed it, ``rounds`` the rounds so far.
-    """
-
-    phase: Int[Array, ""]
-    z: Float[Array, " n+m"]
-    jet: Jet
-    weight: Float[Array, ""]
-    damping: Float[Array, ""]
-    count: Int[Array, ""]
-    steps: Int[Array, ""]
-    active_limits: Bool[Array, " l"]
+    limits: Bool[Array, " l"]
     at_lower: Bool[Array, " n"]
     at_upper: Bool[Array, " n"]
-    changed: Bool[Array, ""]
-    rounds: Int[Array, ""]
+
+
+def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, settings: Settings, y_max):
+    """The exact solution of the active set's equations near (y, multipliers), by
+    optimistix (see the module docstring). Returns (y, multipliers, residual, aux, result)
+    with ``residual`` the largest entry of the KKT (or feasibility) residual and ``aux``
+    = (outputs, c) at the polished point; differentiable in theta (implicit)."""
+    n, n_targets = y.shape[0], len(problem.targets)
+    equations = jnp.concatenate([jnp.ones(n_targets, bool), active.limits])
+    fixed_residual = lambda y: jnp.where(active.at_lower, y, jnp.where(active.at_upper, y - y_max, 0.0))  # noqa: E731
+    solver_options = dict(rtol=settings.rtol * 1e-3, atol=settings.rtol * 1e-3, linear_solver=lx.SVD())
+    adjoint = optx.ImplicitAdjoint(linear_solver=lx.SVD())
+
+    if problem.objective is None:
+
+        def equations_of(y, theta):
+            v, outputs = _values(problem, y, theta)
+            c = v[1:]
+            fixed = active.at_lower | active.at_upper
+            r = jnp.concatenate([jnp.where(equations, c, 0.0), jnp.where(fixed, fixed_residual(y), 0.0)])
+            return r, (outputs, c)
+
+        # A root find with Newton steps through lineax's SVD: on these equations (more
+        # unknowns than equations, in general) that is Gauss-Newton with minimum-norm
+        # steps, and its implicit derivatives (-J^+ dr/dtheta) need first derivatives of
+        # the model only. optimistix.least_squares would differentiate grad |r|^2 / 2,
+        # which traces second derivatives: on the spin-valve example that took the
+        # compile of a batched solve from under 1 GB to over 11 GB.
+        solution = optx.root_find(
+            equations_of, optx.Newton(**solver_options), y, theta, has_aux=True,
+            max_steps=settings.max_steps, adjoint=adjoint, throw=False,
+        )
+        r, aux = equations_of(solution.value, theta)
+        return solution.value, jnp.zeros_like(multipliers), jnp.max(jnp.abs(r), initial=0.0), aux, solution.result
+
+    def kkt(z, theta):
+        y, lam = z[:n], z[n:]
+        J, (v, outputs) = _first_jet(problem, y, theta)
+        c = v[1:]
+        stationarity = weight * J[0] + J[1:].T @ lam
+        r_y = jnp.where(active.at_lower | active.at_upper, fixed_residual(y), stationarity)
+        r_c = jnp.where(equations, c, lam)
+        return jnp.concatenate([r_y, r_c]), (outputs, c)
+
+    z0 = jnp.concatenate([y, jnp.where(equations, multipliers, 0.0)])
+    solution = optx.root_find(
+        kkt, optx.Newton(**solver_options), z0, theta, has_aux=True,
+        max_steps=settings.max_steps, adjoint=adjoint, throw=False,
+    )
+    r, aux = kkt(solution.value, theta)
+    z = solution.value
+    return z[:n], z[n:], jnp.max(jnp.abs(r), initial=0.0), aux, solution.result
 
 
 def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
-    """The whole search as one loop over phases: START (evaluate y0), FEASIBILITY
-    (penalty 1, relative damping), PENALTY (with an objective: penalty DESIGN_PENALTY,
-    objective scaled to a unit gradient; only its active set is wanted, so it stops at a
-    coarser step, sqrt(atol)), then NEWTON rounds on the KKT system of an active set,
-    each followed by the set's update and, where the update clips y into the box,
-    REEVALUATE; a non-finite end takes the start back (RESTART, then FAILED). Each
-    iteration proposes a point by a small phase-dependent step that never calls the model,
-    evaluates the jet there (the model's only trace), then accepts or refuses the point
-    and moves between phases. Steps count those of FEASIBILITY, PENALTY and NEWTON."""
-    n, n_targets, n_limits = len(problem.variables), len(problem.targets), len(problem.limit_rows)
-    m = n_targets + n_limits
-    has_objective = problem.objective is not None
+    """The search, the polish, the implicit derivatives and the status."""
+    n, n_targets = len(problem.variables), len(problem.targets)
     lower, upper, scale, _, _ = problem_arrays(problem)
     y_max = (upper - lower) / scale
-    atol, tol = settings.atol, settings.rtol
+    tol = settings.rtol
 
-    def phase_penalty(state):
-        feasibility = state.phase == FEASIBILITY
-        return jnp.where(feasibility, 1.0, DESIGN_PENALTY), feasibility
+    search = _search(problem, jax.lax.stop_gradient(y0), theta, settings, y_max)
+    step = search.step
+    active = _Active(step.active_limits, step.at_lower, step.at_upper)
+    y_start = jax.lax.stop_gradient(search.y)
+    multipliers_start = jax.lax.stop_gradient(step.multipliers)
 
-    def propose_penalty(state):
-        penalty, feasibility = phase_penalty(state)
-        y = state.z[:n]
-        delta = _penalty_step(state.jet, y, y_max, state.weight, penalty, state.damping, feasibility, n_targets)
-        return state.z.at[:n].set(jnp.clip(y + delta, 0.0, y_max)), jnp.concatenate([delta, jnp.zeros(m)]), jnp.asarray(True)
-
-    def propose_newton(state):
-        active = (state.active_limits, state.at_lower, state.at_upper)
-        r, jacobian, _, _ = _kkt(state.z, active, state.jet, y_max, state.weight, n_targets)
-        delta = -(jnp.linalg.solve(jacobian, r) if has_objective else jnp.linalg.pinv(jacobian) @ r)
-        ok = jnp.all(jnp.isfinite(delta))
-        delta = jnp.where(ok, delta, 0.0)
-        return state.z + delta, delta, ok
-
-    def stay(state):
-        z = jnp.where(state.phase == RESTART, jnp.concatenate([y0, jnp.zeros(m)]), state.z)
-        return z, jnp.zeros(n + m), jnp.asarray(True)
-
-    def finish(z):
-        return jnp.where(jnp.all(jnp.isfinite(z)), DONE, RESTART)
-
-    def enter_newton(state):
-        # At the penalty minimiser grad f + P J^T violation = 0: P violation estimates the
-        # multipliers (0 without an objective, where no multiplier is needed).
-        y, c = state.z[:n], state.jet.v[1:]
-        violation = _violation(c, n_targets)
-        multipliers = DESIGN_PENALTY * violation * has_objective
-        gradient = state.weight * state.jet.J[0] + DESIGN_PENALTY * state.jet.J[1:].T @ violation
-        return eqx.tree_at(
-            lambda s: (s.phase, s.z, s.count, s.active_limits, s.at_lower, s.at_upper),
-            state,
-            (
-                jnp.asarray(NEWTON),
-                jnp.concatenate([y, multipliers]),
-                jnp.asarray(0),
-                c[n_targets:] > -DESIGN_ACTIVE_TOL,
-                (y <= 0.0) & (gradient > 0.0),
-                (y >= y_max) & (gradient < 0.0),
-            ),
+    def polished(theta):
+        y, multipliers, residual, aux, result = _polish(
+            problem, y_start, multipliers_start, theta, active, search.weight, settings, y_max
         )
+        return y, (y, multipliers, residual, aux, result)
 
-    def after_penalty(state, z, delta, ok, jet):
-        penalty, feasibility = phase_penalty(state)
-        value, gradient = _merit(state.jet, state.weight, penalty, n_targets)
-        value_trial, _ = _merit(jet, state.weight, penalty, n_targets)
-        # A step that is no descent direction (possible while the damping has not yet made
-        # an indefinite Hessian positive definite) is refused like one that fails.
-        accept = (value_trial < value) & (jnp.dot(gradient, delta[:n]) < 0.0)
-        damping = jnp.where(accept, state.damping / _DAMPING_DOWN, state.damping * _DAMPING_UP)
-        xtol = jnp.where(feasibility, atol, jnp.sqrt(atol))
-        count = state.count + 1
-        finished = (jnp.max(jnp.abs(delta)) <= xtol) | (damping > DESIGN_DAMPING_MAX) | (count >= settings.max_steps)
-        z, jet = _pick(accept, (z, jet), (state.z, state.jet))
-        state = eqx.tree_at(
-            lambda s: (s.z, s.jet, s.damping, s.count, s.steps), state, (z, jet, damping, count, state.steps + 1)
-        )
-        # With an objective scaled to a unit gradient, damping 1 bounds a step to about the box.
-        penalty_start = eqx.tree_at(
-            lambda s: (s.phase, s.weight, s.damping, s.count),
-            state,
-            (
-                jnp.asarray(PENALTY),
-                safe_div(1.0, jnp.linalg.norm(jet.J[0]), at_zero=1.0),
-                jnp.asarray(1.0),
-                jnp.asarray(0),
-            ),
-        )
-        to_penalty = finished & feasibility & has_objective
-        return _pick(to_penalty, penalty_start, _pick(finished, enter_newton(state), state))
-
-    def after_newton(state, z, delta, ok, jet):
-        count = state.count + 1
-        going_on = eqx.tree_at(lambda s: (s.z, s.jet, s.count, s.steps), state, (z, jet, count, state.steps + 1))
-        # The round ends: check the multipliers' signs, the inactive limits and the box.
-        active = (state.active_limits, state.at_lower, state.at_upper)
-        _, _, stationarity, c = _kkt(z, active, jet, y_max, state.weight, n_targets)
-        y, multipliers = z[:n], z[n:]
-        fixed = state.at_lower | state.at_upper
-        new_limits = jnp.where(state.active_limits, multipliers[n_targets:] >= -tol, c[n_targets:] > tol)
-        new_lower = jnp.where(state.at_lower, stationarity >= -tol, ~fixed & (y < 0.0))
-        new_upper = jnp.where(state.at_upper, stationarity <= tol, ~fixed & (y > y_max))
-        changed = (
-            jnp.any(new_limits != state.active_limits)
-            | jnp.any(new_lower != state.at_lower)
-            | jnp.any(new_upper != state.at_upper)
-        )
-        clipped = jnp.clip(y, 0.0, y_max)
-        rounds = state.rounds + 1
-        z = z.at[:n].set(clipped)
-        next_phase = jnp.where(
-            jnp.any(clipped != y), REEVALUATE, jnp.where(changed & (rounds < _ACTIVE_SET_ROUNDS), NEWTON, finish(z))
-        )
-        round_end = eqx.tree_at(
-            lambda s: (s.phase, s.z, s.count, s.active_limits, s.at_lower, s.at_upper, s.changed, s.rounds),
-            going_on,
-            (next_phase, z, jnp.asarray(0), new_limits, new_lower, new_upper, changed, rounds),
-        )
-        small = jnp.max(jnp.abs(delta[:n]), initial=0.0) <= atol
-        return _pick(~ok | small | (count >= settings.max_steps), round_end, going_on)
-
-    def after_stay(state, z, delta, ok, jet):
-        # START goes on to FEASIBILITY, RESTART ends, REEVALUATE to the next round or the end.
-        going_on = state.changed & (state.rounds < _ACTIVE_SET_ROUNDS)
-        phase = jnp.select(
-            [state.phase == START, state.phase == RESTART, going_on], [FEASIBILITY, FAILED, NEWTON], finish(z)
-        )
-        moved_on = eqx.tree_at(lambda s: (s.phase, s.z, s.jet, s.count), state, (phase, z, jet, jnp.asarray(0)))
-        # A start where the model is flat in every direction (the centre of a symmetric
-        # design, the bottom of a parabola to be maximised) offers no step at all: move it
-        # once a little into the box, by a different amount per variable, and start again.
-        flat = (state.phase == START) & (state.count == 0) & jnp.all(jet.J == 0.0)
-        inward = jnp.where(z[:n] > 0.5 * y_max, -1.0, 1.0)
-        nudge = inward * DESIGN_START_NUDGE * y_max * (1.0 + jnp.arange(n)) / n
-        restarted = eqx.tree_at(lambda s: (s.z, s.count), state, (z.at[:n].add(nudge), jnp.asarray(1)))
-        return _pick(flat, restarted, moved_on)
-
-    def body(state):
-        branch = jnp.asarray(_BRANCH_OF_PHASE)[state.phase]
-        z, delta, ok = jax.lax.switch(branch, [propose_penalty, propose_newton, stay], state)
-        jet = _jet(problem, z[:n], theta)
-        return jax.lax.switch(branch, [after_penalty, after_newton, after_stay], state, z, delta, ok, jet)
-
-    k = len(problem.outputs)
-    blank = Jet(jnp.zeros(1 + m), jnp.zeros((1 + m, n)), jnp.zeros((1 + m, n, n)), jnp.zeros(k))
-    no = lambda size: jnp.zeros(size, bool)  # noqa: E731
-    state = _State(
-        phase=jnp.asarray(START),
-        z=jnp.concatenate([y0, jnp.zeros(m)]),
-        jet=blank,
-        weight=jnp.zeros(()),
-        damping=jnp.asarray(DESIGN_DAMPING_START),
-        count=jnp.asarray(0),
-        steps=jnp.asarray(0),
-        active_limits=no(n_limits),
-        at_lower=no(n),
-        at_upper=no(n),
-        changed=jnp.asarray(True),
-        rounds=jnp.asarray(0),
+    if theta.shape[0]:
+        dy, (y, multipliers, residual, (outputs, c), result) = jax.jacfwd(polished, has_aux=True)(theta)
+    else:
+        _, (y, multipliers, residual, (outputs, c), result) = polished(theta)
+        dy = jnp.zeros((n, 0))
+    # The polish refines the search's point; one that ends outside the box or far away
+    # found another solution of the equations, and the search's point stands.
+    kept = (
+        jnp.all(jnp.isfinite(y))
+        & jnp.all((y >= -DESIGN_ON_CONSTRAINT) & (y <= y_max + DESIGN_ON_CONSTRAINT))
+        & (jnp.max(jnp.abs(y - y_start)) <= 1e-4)
     )
-    state = jax.lax.while_loop(lambda s: s.phase < DONE, body, state)
-
-    finite, z, jet = state.phase == DONE, state.z, state.jet
-    active = (state.active_limits, state.at_lower, state.at_upper)
-    y, multipliers = z[:n], z[n:]
-    r, r_z, _, c = _kkt(z, active, jet, y_max, state.weight, n_targets)
-    # Implicit function theorem on R(z, theta) = 0; R depends on theta only through the
-    # equation rows, each c_i linearly in its own theta_i.
-    equations = jnp.concatenate([jnp.ones(n_targets, bool), state.active_limits])
-    r_theta = jnp.concatenate([jnp.zeros((n, m)), jnp.diag(jnp.where(equations, _theta_slopes(problem), 0.0))])
-    dz = -jnp.linalg.pinv(r_z) @ r_theta
-    derivatives = jnp.where(jnp.isfinite(dz[:n]), scale[:, None] * dz[:n], 0.0)
+    y = jnp.where(kept, jnp.clip(y, 0.0, y_max), y_start)
+    outputs = jnp.where(kept, outputs, search.jet.outputs)
+    c = jnp.where(kept, c, search.jet.v[1:])
+    derivatives = jnp.where(kept & jnp.isfinite(dy), scale[:, None] * dy, 0.0)
 
     # Stationarity is a gradient condition: met to sqrt(rtol), as the optimum's value is.
-    kkt_met = ~state.changed & (jnp.max(jnp.abs(r), initial=0.0) <= jnp.sqrt(tol))
-    inner_failed = (
-        jet.outputs[problem.outputs.index(problem.converged)] < 0.5 if problem.converged is not None else False
-    )
-    status = jnp.select(
+    kkt_met = kept & (residual <= jnp.sqrt(tol)) & (search.phase == CONVERGED)
+    finite = jnp.all(jnp.isfinite(outputs)) & jnp.all(jnp.isfinite(y)) & (search.phase != NONFINITE_START)
+    inner_failed = outputs[problem.outputs.index(problem.converged)] < 0.5 if problem.converged is not None else False
+    status = DesignStatus.successful
+    for failed, item in reversed(
         [
-            ~finite,
-            inner_failed,
-            jnp.any(jnp.abs(c[:n_targets]) > tol),
-            jnp.any(c[n_targets:] > tol),
-            ~kkt_met,
-        ],
-        [NONFINITE, MECHANICS_NOT_CONVERGED, INFEASIBLE_TARGET, LIMIT_VIOLATED, MAX_STEPS_REACHED],
-        SUCCESSFUL,
-    )
+            (~finite, DesignStatus.nonfinite),
+            (inner_failed, DesignStatus.mechanics_not_converged),
+            (jnp.any(jnp.abs(c[:n_targets]) > tol), DesignStatus.infeasible_target),
+            (jnp.any(c[n_targets:] > tol), DesignStatus.limit_violated),
+            (search.phase == NOT_MINIMUM, DesignStatus.not_a_minimum),
+            (~kkt_met, DesignStatus.max_steps_reached),
+        ]
+    ):
+        status = DesignStatus.where(failed, item, status)
+    del result  # its verdict is the residual's, checked above against our own tolerance
+    m = theta.shape[0]  # without _evaluate's row that never binds
     return CoreSolution(
         x=lower + scale * y,
-        multipliers=multipliers,
-        outputs=jet.outputs,
-        residuals=c,
-        active_limits=state.active_limits,
-        at_lower=state.at_lower,
-        at_upper=state.at_upper,
+        multipliers=jnp.where(kept, multipliers, multipliers_start)[:m],
+        outputs=outputs,
+        residuals=c[:m],
+        active_limits=active.limits[: m - n_targets],
+        at_lower=active.at_lower,
+        at_upper=active.at_upper,
         derivatives=derivatives,
-        status=status,
-        steps=state.steps,
+        status=status._value,
+        steps=search.steps,
     )
 
 
@@ -582,12 +657,13 @@ def solve(
         rtol: tolerance on scaled residuals: a target is met when
             |achieved - value| <= rtol * scale (scale defaults to |value|); limits alike.
         atol: convergence tolerance on steps of the variables scaled to their bound width.
-        max_steps: the most steps of each phase (feasibility, penalty, Newton polish).
+        max_steps: the most model evaluations of the search (line-search trials
+            included), and the most Newton steps of the polish.
 
     Returns:
-        A :class:`DesignResult`: status ("successful", "infeasible_target",
-        "limit_violated", "max_steps_reached", "nonfinite" or
-        "mechanics_not_converged"), parameters, achieved
+        A :class:`DesignResult`: status (a :class:`DesignStatus` name: "successful",
+        "nonfinite", "mechanics_not_converged", "infeasible_target", "limit_violated",
+        "not_a_minimum" or "max_steps_reached"), parameters, achieved
         targets and limits, active bounds and limits, steps, seconds, and the implicit
         derivatives of the parameters with respect to the target values and active limit
         bounds.

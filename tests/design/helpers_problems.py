@@ -1,0 +1,167 @@
+"""A zoo of constrained problems with published optima, as magdesign design problems.
+
+Problems of the Hock-Schittkowski collection (W. Hock, K. Schittkowski, "Test Examples for
+Nonlinear Programming Codes", Lecture Notes in Economics and Mathematical Systems 187,
+Springer 1981), numbered as there, each with its published start and optimum. The model
+returns the objective "f", the inequality constraints "g1", ... (each g >= 0 in the book,
+given here as a Limit with lower 0) and the equalities "h1", ... (Target 0, scale 1).
+magdesign variables need finite bounds: where the book has none, a box far from the
+optimum is added ("box"), which leaves the problem's solution unchanged.
+
+A problem whose published start lies outside a bound is started on that bound. hs002 is
+left out: from its start moved onto its bound, a second local minimum lies nearer.
+"""
+
+import math
+from dataclasses import dataclass, field
+
+import jax.numpy as jnp
+import numpy as np
+
+from magdesign.design import Limit, Objective, Problem, Target, Variable
+
+
+@dataclass(frozen=True)
+class Published:
+    """A published problem: objective f(x), g(x) >= 0, h(x) == 0 on a list x."""
+
+    name: str
+    f: object
+    bounds: list  # [(lower, upper)] per variable
+    start: list
+    optimum: list
+    value: float
+    g: list = field(default_factory=list)
+    h: list = field(default_factory=list)
+
+    def problem(self) -> Problem:
+        names = [f"x{i + 1}" for i in range(len(self.bounds))]
+
+        def model(v):
+            x = [v[name] for name in names]
+            outputs = {"f": self.f(x)}
+            outputs.update({f"g{i + 1}": g(x) for i, g in enumerate(self.g)})
+            outputs.update({f"h{i + 1}": h(x) for i, h in enumerate(self.h)})
+            return outputs
+
+        variables = [
+            Variable(name, lo, hi, start=float(np.clip(x0, lo, hi)))
+            for name, (lo, hi), x0 in zip(names, self.bounds, self.start)
+        ]
+        return Problem(
+            model,
+            variables,
+            targets=[Target(f"h{i + 1}", 0.0, scale=1.0) for i in range(len(self.h))],
+            limits=[Limit(f"g{i + 1}", lower=0.0, scale=1.0) for i in range(len(self.g))],
+            objective=Objective("f", sense="min"),
+        )
+
+
+def rosenbrock(x):
+    return 100.0 * (x[1] - x[0] ** 2) ** 2 + (1.0 - x[0]) ** 2
+
+
+BOX = 100.0
+SQRT7 = math.sqrt(7.0)
+# hs011's optimum lies on x2 = x1^2, where 2 x1^3 + x1 - 5 = 0 (Cardano's root; the book
+# gives 1.23467971, 1.52443370).
+HS011_X1 = math.cbrt(1.25 + math.sqrt(25.0 / 16.0 + 1.0 / 216.0)) + math.cbrt(1.25 - math.sqrt(25.0 / 16.0 + 1.0 / 216.0))
+
+HOCK_SCHITTKOWSKI = [
+    Published("hs001", rosenbrock, [(-BOX, BOX), (-1.5, BOX)], [-2.0, 1.0], [1.0, 1.0], 0.0),
+    Published("hs003", lambda x: x[1] + 1e-5 * (x[1] - x[0]) ** 2, [(-BOX, BOX), (0.0, BOX)], [10.0, 1.0], [0.0, 0.0], 0.0),
+    Published(
+        "hs004", lambda x: (x[0] + 1.0) ** 3 / 3.0 + x[1], [(1.0, BOX), (0.0, BOX)], [1.125, 0.125], [1.0, 0.0], 8.0 / 3.0
+    ),
+    Published(
+        "hs005",
+        lambda x: jnp.sin(x[0] + x[1]) + (x[0] - x[1]) ** 2 - 1.5 * x[0] + 2.5 * x[1] + 1.0,
+        [(-1.5, 4.0), (-3.0, 3.0)],
+        [0.0, 0.0],
+        [0.5 - math.pi / 3.0, -0.5 - math.pi / 3.0],
+        -math.sqrt(3.0) / 2.0 - math.pi / 3.0,
+    ),
+    Published(
+        "hs006", lambda x: (1.0 - x[0]) ** 2, [(-10.0, 10.0), (-10.0, 10.0)], [-1.2, 1.0], [1.0, 1.0], 0.0,
+        h=[lambda x: 10.0 * (x[1] - x[0] ** 2)],
+    ),
+    Published(
+        "hs007", lambda x: jnp.log(1.0 + x[0] ** 2) - x[1], [(-10.0, 10.0), (-10.0, 10.0)], [2.0, 2.0],
+        [0.0, math.sqrt(3.0)], -math.sqrt(3.0),
+        h=[lambda x: (1.0 + x[0] ** 2) ** 2 + x[1] ** 2 - 4.0],
+    ),
+    Published(
+        "hs009", lambda x: jnp.sin(math.pi * x[0] / 12.0) * jnp.cos(math.pi * x[1] / 16.0),
+        [(-10.0, 10.0), (-10.0, 10.0)], [0.0, 0.0], [-3.0, -4.0], -0.5,
+        h=[lambda x: 4.0 * x[0] - 3.0 * x[1]],
+    ),
+    Published(
+        "hs010", lambda x: x[0] - x[1], [(-BOX, BOX), (-BOX, BOX)], [-10.0, 10.0], [0.0, 1.0], -1.0,
+        g=[lambda x: -3.0 * x[0] ** 2 + 2.0 * x[0] * x[1] - x[1] ** 2 + 1.0],
+    ),
+    Published(
+        "hs011", lambda x: (x[0] - 5.0) ** 2 + x[1] ** 2 - 25.0, [(-BOX, BOX), (-BOX, BOX)], [4.9, 0.1],
+        [HS011_X1, HS011_X1**2], (HS011_X1 - 5.0) ** 2 + HS011_X1**4 - 25.0,
+        g=[lambda x: -x[0] ** 2 + x[1]],
+    ),
+    Published(
+        "hs012", lambda x: 0.5 * x[0] ** 2 + x[1] ** 2 - x[0] * x[1] - 7.0 * x[0] - 7.0 * x[1],
+        [(-BOX, BOX), (-BOX, BOX)], [0.0, 0.0], [2.0, 3.0], -30.0,
+        g=[lambda x: 25.0 - 4.0 * x[0] ** 2 - x[1] ** 2],
+    ),
+    Published(
+        "hs014", lambda x: (x[0] - 2.0) ** 2 + (x[1] - 1.0) ** 2, [(-BOX, BOX), (-BOX, BOX)], [2.0, 2.0],
+        [0.5 * (SQRT7 - 1.0), 0.25 * (SQRT7 + 1.0)], 9.0 - 23.0 * SQRT7 / 8.0,
+        g=[lambda x: -0.25 * x[0] ** 2 - x[1] ** 2 + 1.0],
+        h=[lambda x: x[0] - 2.0 * x[1] + 1.0],
+    ),
+    Published(
+        "hs015", rosenbrock, [(-BOX, 0.5), (-BOX, BOX)], [-2.0, 1.0], [0.5, 2.0], 306.5,
+        g=[lambda x: x[0] * x[1] - 1.0, lambda x: x[0] + x[1] ** 2],
+    ),
+    Published(
+        "hs021", lambda x: 0.01 * x[0] ** 2 + x[1] ** 2 - 100.0, [(2.0, 50.0), (-50.0, 50.0)], [-1.0, -1.0],
+        [2.0, 0.0], -99.96,
+        g=[lambda x: 10.0 * x[0] - x[1] - 10.0],
+    ),
+    Published(
+        "hs028", lambda x: (x[0] + x[1]) ** 2 + (x[1] + x[2]) ** 2, [(-BOX, BOX)] * 3, [-4.0, 1.0, 1.0],
+        [0.5, -0.5, 0.5], 0.0,
+        h=[lambda x: x[0] + 2.0 * x[1] + 3.0 * x[2] - 1.0],
+    ),
+    Published(
+        "hs035",
+        lambda x: 9.0 - 8.0 * x[0] - 6.0 * x[1] - 4.0 * x[2] + 2.0 * x[0] ** 2 + 2.0 * x[1] ** 2 + x[2] ** 2
+        + 2.0 * x[0] * x[1] + 2.0 * x[0] * x[2],
+        [(0.0, BOX)] * 3, [0.5, 0.5, 0.5], [4.0 / 3.0, 7.0 / 9.0, 4.0 / 9.0], 1.0 / 9.0,
+        g=[lambda x: 3.0 - x[0] - x[1] - 2.0 * x[2]],
+    ),
+    Published(
+        "hs038",
+        lambda x: 100.0 * (x[1] - x[0] ** 2) ** 2 + (1.0 - x[0]) ** 2 + 90.0 * (x[3] - x[2] ** 2) ** 2
+        + (1.0 - x[2]) ** 2 + 10.1 * ((x[1] - 1.0) ** 2 + (x[3] - 1.0) ** 2) + 19.8 * (x[1] - 1.0) * (x[3] - 1.0),
+        [(-10.0, 10.0)] * 4, [-3.0, -1.0, -3.0, -1.0], [1.0, 1.0, 1.0, 1.0], 0.0,
+    ),
+    Published(
+        "hs048", lambda x: (x[0] - 1.0) ** 2 + (x[1] - x[2]) ** 2 + (x[3] - x[4]) ** 2, [(-BOX, BOX)] * 5,
+        [3.0, 5.0, -3.0, 2.0, -2.0], [1.0] * 5, 0.0,
+        h=[lambda x: x[0] + x[1] + x[2] + x[3] + x[4] - 5.0, lambda x: x[2] - 2.0 * (x[3] + x[4]) + 3.0],
+    ),
+    Published(
+        "hs071", lambda x: x[0] * x[3] * (x[0] + x[1] + x[2]) + x[2], [(1.0, 5.0)] * 4, [1.0, 5.0, 5.0, 1.0],
+        [1.0, 4.742999637, 3.821149984, 1.379408293], 17.0140173,
+        g=[lambda x: x[0] * x[1] * x[2] * x[3] - 25.0],
+        h=[lambda x: x[0] ** 2 + x[1] ** 2 + x[2] ** 2 + x[3] ** 2 - 40.0],
+    ),
+    Published(
+        "hs076",
+        lambda x: x[0] ** 2 + 0.5 * x[1] ** 2 + x[2] ** 2 + 0.5 * x[3] ** 2 - x[0] * x[2] + x[2] * x[3]
+        - x[0] - 3.0 * x[1] + x[2] - x[3],
+        [(0.0, BOX)] * 4, [0.5] * 4, [3.0 / 11.0, 23.0 / 11.0, 0.0, 6.0 / 11.0], -4.681818181818,
+        g=[
+            lambda x: 5.0 - x[0] - 2.0 * x[1] - x[2] - x[3],
+            lambda x: 4.0 - 3.0 * x[0] - x[1] - 2.0 * x[2] + x[3],
+            lambda x: x[1] + 4.0 * x[2] - 1.5,
+        ],
+    ),
+]
