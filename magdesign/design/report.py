@@ -7,12 +7,15 @@ from magdesign.units import convert
 
 
 class DesignStatus(eqx.Enumeration):
-    """The design solver's outcomes, in its order of precedence (the first that applies)."""
+    """The design solver's outcomes. The solver gives the first that applies, in the order
+    nonfinite, mechanics_not_converged, max_steps_reached (a search cut short), then
+    infeasible_target, limit_violated, not_a_minimum, max_steps_reached (a search that
+    ended but whose polish did not converge), successful."""
 
     successful = "every target met, every limit held, a local optimum to first and second order"
     nonfinite = "the model gave NaN or inf at the start or at the end"
     mechanics_not_converged = "a solver inside the model (e.g. the dome's) did not converge at the end"
-    infeasible_target = "a target is not met: no point near the end meets it (see violated)"
+    infeasible_target = "a target is not met: the search ended where the violation is least nearby (see violated)"
     limit_violated = "a limit is broken at the end (see violated)"
     not_a_minimum = "a stationary point that the objective can leave along a direction of negative curvature"
     max_steps_reached = "the search or its polish did not converge in max_steps"

@@ -530,6 +530,8 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
         [
             (~finite, DesignStatus.nonfinite),
             (inner_failed, DesignStatus.mechanics_not_converged),
+            # A search cut short by max_steps says so, not that a target is out of reach.
+            (search.phase < CONVERGED, DesignStatus.max_steps_reached),
             (jnp.any(jnp.abs(c[:n_targets]) > tol), DesignStatus.infeasible_target),
             (jnp.any(c[n_targets:] > tol), DesignStatus.limit_violated),
             (search.phase == NOT_MINIMUM, DesignStatus.not_a_minimum),

@@ -198,3 +198,9 @@ def test_default_design_with_the_remanence_free(tmp_path):
     assert result.parameters["magnet.remanence"] == pytest.approx(remanence, abs=1e-12)
     assert result.parameters["geometry.gap"] == pytest.approx(closest + travel, rel=1e-8)
     assert result.outputs["sensitivity"] == pytest.approx((4.8e-3 - bz(closest + travel)) / 5.0, rel=1e-8)
+
+
+def test_a_search_cut_short_says_max_steps_not_infeasible():
+    problem = next(p for p in HOCK_SCHITTKOWSKI if p.name == "hs071").problem()
+    result = solve(problem, max_steps=3)
+    assert result.status == "max_steps_reached"
