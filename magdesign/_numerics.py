@@ -161,6 +161,24 @@ DOME_LEVENBERG_START = 1e-6
 FD_CALIBRATION_STEP = 1e-6
 
 
+# Smallest distance to a film's corner, as a fraction of the film's width: the field of a
+# finite film diverges logarithmically at its corners (where its face meets its side);
+# there the value at this distance is returned, finite with finite gradients (like the
+# cylinder's KC_MIN on its edges).
+EDGE_DISTANCE_MIN = 1e-15
+
+
+def expm1_ratio(s):
+    """(e^s - 1) / s for real or complex s, 1 at s = 0 (the removable singularity).
+
+    Singularity: 0 / 0 at s = 0 (a point on a film's bottom face, exactly below a
+    quadrature node). Elsewhere expm1 keeps full relative precision for small |s|.
+    """
+    is_zero = s == 0
+    safe = jnp.where(is_zero, jnp.ones_like(s), s)
+    return jnp.where(is_zero, jnp.ones_like(s), jnp.expm1(safe) / safe)
+
+
 def float_array(x):
     """``x`` as a floating-point array: float32 stays float32 (a documented, tested option
     of the field kernels), anything else becomes float64."""

@@ -9,6 +9,10 @@ The cases:
   fixed grid of sensor positions 1.5..20 radii from its centre, all directions; error is
   the largest |B - B_exact| / |B_exact|; one evaluation is one point (the batch time over
   the point count). float32 runs the exact kernel on float32 inputs.
+- film field: the seed-004 film (T 6 mm, d 0.5 mm) 3 periods wide, at its 3 x 3 taxels
+  (6 mm pitch, 3.5 mm below it) sheared by 0..3 mm (8 steps); the infinite
+  film's closed form against the exact field of the finite film; error is the largest
+  |B - B_finite| / |B_finite|; one evaluation is one point.
 - sensor area averaging: the seed-002 spin-valve active area (200 x 95 um) at 64 chip
   positions 0.6..2 mm above the 1 x 1 mm magnet; n = 1, 4, 16, 64 Gauss nodes against 256;
   error is the largest |B_n - B_256| / max |B_256|. One evaluation is one chip.
@@ -32,7 +36,7 @@ from matplotlib.figure import Figure
 
 from magdesign.design import solve
 from magdesign.design.spec import default_spec, problem_from_spec
-from magdesign.fields import cylinder
+from magdesign.fields import cylinder, film
 from magdesign.mechanics import LinearElastic, MooneyRivlin, dome_compliance, layer_stiffness
 from magdesign.scene.effects import AreaAveraging
 from magdesign.units import mm, um
@@ -44,6 +48,7 @@ AREA_REFERENCE_POINTS = 16
 
 SEED001_MAGNET = dict(radius=1.5 * mm, height=1 * mm, polarization=1.17)
 SEED002_MAGNET = dict(radius=0.5 * mm, height=1 * mm, polarization=1.3)
+SEED004_FILM = dict(period=6 * mm, thickness=0.5 * mm, magnetization=0.085)
 SEED001_RESIN = MooneyRivlin(c10=0.1182e6, c01=0.1769e6)
 
 
@@ -96,6 +101,25 @@ def measure_field():
     for fidelity, fn, args in (("exact", exact_fn, points), ("dipole", dipole_fn, points), ("exact float32", exact_fn, points32)):
         error = _relative_error(fn(args).astype(jnp.float64), exact)
         rows.append(Row("cylinder field", fidelity, error, _warm_seconds(fn, args, per=len(points)), "relative", "one point"))
+    return rows
+
+
+def measure_film():
+    """The infinite film's closed form against the exact field of a film 3 periods wide."""
+    # the film's field does not depend on y: the taxel columns x = -6, 0, 6 mm, sheared
+    taxels = (np.arange(-1, 2)[:, None] * 6 * mm - np.linspace(0.0, 3 * mm, 8)[None, :]).ravel()
+    x = jnp.asarray(np.resize(taxels, 2000))
+    z = jnp.full(x.shape, 3.5 * mm)
+
+    def field(periods):
+        return jax.jit(lambda x, z: jnp.stack(film(x, z, **SEED004_FILM, periods=periods), axis=-1))
+
+    finite = field(3)(x, z)
+    rows = []
+    for name, periods in (("finite (3 periods)", 3), ("infinite", None)):
+        fn = field(periods)
+        error = _relative_error(fn(x, z), finite)
+        rows.append(Row("film field", name, error, _warm_seconds(fn, x, z, per=x.size), "relative", "one point"))
     return rows
 
 
@@ -194,6 +218,7 @@ def measure_default_design():
 
 MEASUREMENTS = (
     ("cylinder field", measure_field),
+    ("film field", measure_film),
     ("sensor area averaging", measure_area_averaging),
     ("elastomer layer", measure_layer),
     ("dome compliance", measure_dome),

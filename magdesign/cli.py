@@ -3,6 +3,7 @@
     magdesign solve [SPEC.toml] [--json] [--fidelity LEVEL] [--plot FILE]
     magdesign simulate SPEC.toml [--json]
     magdesign accuracy [--json] [--plot FILE]
+    magdesign show SPEC.toml --plot FILE
 
 Exit codes: 0 done (solve: solved), 2 bad spec or arguments (one line naming the key),
 3 solve not successful (the status and the violated target are printed) or a simulation
@@ -25,6 +26,7 @@ from magdesign.design import solve as solve_problem
 from magdesign.design.plot import plot_design
 from magdesign.design.spec import default_spec, load_spec, problem_from_spec
 from magdesign.scene import loads_from_spec, scene_from_spec, simulate, simulation_json, simulation_table
+from magdesign.scene.picture import plot_scene
 from magdesign.units import SpecError
 
 EXIT_BAD_SPEC = 2
@@ -74,7 +76,18 @@ def build_parser():
     accuracy_cmd = sub.add_parser("accuracy", help="measure every model's error against its time, on this machine")
     accuracy_cmd.add_argument("--json", action="store_true", help="print a JSON list of rows instead of the table")
     accuracy_cmd.add_argument("--plot", metavar="FILE", help="write a PNG of error against time (log-log)")
+
+    show = sub.add_parser("show", help="draw the sensor in its axial plane with its field, at rest and at the largest load")
+    show.add_argument("spec", help="scene or design spec (TOML); a design spec shows its start point")
+    show.add_argument("--plot", metavar="FILE", required=True, help="the PNG to write")
     return parser
+
+
+def run_show(args):
+    spec = load_spec(args.spec)
+    plot_scene(scene_from_spec(spec), loads_from_spec(spec), args.plot, title=args.spec)
+    print(f"wrote {args.plot}")
+    return 0
 
 
 def run_solve(args):
@@ -112,7 +125,7 @@ def run_accuracy(args):
 def main(argv=None):
     args = build_parser().parse_args(argv)
     use_compilation_cache()
-    command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy}[args.command]
+    command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy, "show": run_show}[args.command]
     try:
         return command(args)
     except (SpecError, ValueError) as error:

@@ -100,3 +100,19 @@ def test_simulate_flags_load_points_where_the_dome_did_not_converge(tmp_path, ca
     assert main(["simulate", str(path), "--json"]) == 3
     converged = json.loads(capsys.readouterr().out)["converged"]
     assert converged[0] and not converged[-1]
+
+
+def test_show_writes_a_picture(capsys, tmp_path):
+    plot = tmp_path / "sensor.png"
+    assert main(["show", str(EXAMPLES / "spin_valve_matrix.toml"), "--plot", str(plot)]) == 0
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and str(plot) in capsys.readouterr().out
+
+
+def test_show_needs_a_plot_file_and_a_good_spec(capsys, tmp_path):
+    with pytest.raises(SystemExit) as exit_code:
+        main(["show", str(EXAMPLES / "dome_hall.toml")])
+    assert exit_code.value.code == 2  # argparse: --plot is required
+    path = tmp_path / "bad.toml"
+    path.write_text((EXAMPLES / "dome_hall.toml").read_text().replace('radius = "1.5 mm"', 'radius = "1.5"'))
+    assert main(["show", str(path), "--plot", str(tmp_path / "x.png")]) == 2
+    assert "magnet.radius" in capsys.readouterr().err and not (tmp_path / "x.png").exists()

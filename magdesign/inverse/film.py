@@ -3,8 +3,10 @@
     Fz = c1 S E / (k h) ln(|B|(z1) / |B|(z0)) + b1
     Fx = c2 S G / (k h) (phi0 - phi1) + b2
 
-|B| and the field angle phi = atan2(Bx, Bz) of one taxel at rest (index 0) and
-loaded (1); k = 2 pi / T. The paper writes arctan(R_B) with R_B = Bx / Bz; the
+|B| and the field angle phi of one taxel at rest (index 0) and loaded (1);
+k = 2 pi / T. Readings are in the scene frame (z up, towards the film); the angle is
+the film frame's, phi = atan2(Bx, -Bz) = kx below an infinite film
+(:class:`magdesign.scene.FilmScene`), so a shear u moves it by -k u. The paper writes arctan(R_B) with R_B = Bx / Bz; the
 angle difference is the same for |kx| < pi/2 and stays exact beyond (atan2, not
 arctan of a ratio). S E / h and S G / h are the layer's stiffnesses k_n and k_s
 (:func:`magdesign.mechanics.layer_stiffness`; E is the effective compression modulus
@@ -35,6 +37,6 @@ def film_forces(
     stiffness = scene.layer.stiffness
     magnitude_ratio = jnp.linalg.norm(loaded, axis=-1) / jnp.linalg.norm(rest, axis=-1)
     fz = c1 * stiffness.normal / k * jnp.log(magnitude_ratio) + b1
-    turn = film_angle(rest[..., 0], rest[..., 2]) - film_angle(loaded[..., 0], loaded[..., 2])
+    turn = film_angle(rest[..., 0], -rest[..., 2]) - film_angle(loaded[..., 0], -loaded[..., 2])
     fx = c2 * stiffness.shear / k * turn + b2
     return fz, fx

@@ -20,6 +20,8 @@ from magdesign.scene.core import SimulationResult as SimulationResult
 from magdesign.scene.core import with_parameters as with_parameters
 from magdesign.scene.effects import EFFECT_NAMES as EFFECT_NAMES
 from magdesign.scene.film_scene import FilmScene as FilmScene
+from magdesign.scene.interop import MagpylibObjects as MagpylibObjects
+from magdesign.scene.interop import to_magpylib as to_magpylib
 from magdesign.scene.loads import Loads as Loads
 from magdesign.scene.loads import loads_from_spec as loads_from_spec
 from magdesign.scene.magnet_scene import MagnetScene as MagnetScene

@@ -63,7 +63,10 @@ class Table:
         return value
 
     def integer(self, key, default=_MISSING, minimum=1):
+        """An integer >= ``minimum``; ``default`` when the key is absent."""
         value = self._get(key, default)
+        if value is default and default is not _MISSING:
+            return default
         if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
             raise SpecError(f"{self.name}.{key}: expected an integer >= {minimum}, got {value!r}")
         return value

@@ -25,6 +25,7 @@ from magdesign.scene.loads import loads_from_spec
 from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadout
 from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
+from magdesign.scene.pose import Magnet
 from magdesign.transducers import SpinValve, ak8963, inesc_spin_valve, mlx90393, panasonic_meander
 from magdesign.units import SpecError, parse, uT
 
@@ -172,13 +173,58 @@ def _hall_effects(spec, hall):
                     noise=float(jnp.max(hall.lsb)))
 
 
+def _optional_vector(table, key, unit):
+    """A (3,) array from a list of 3 quantities, or None when the key is absent."""
+    value = table.quantities(key, unit, length=3, default=None)
+    return None if value is None else jnp.asarray(value)
+
+
+def _extra_magnets(magnet):
+    """[[magnet.extra]]: further cylinders, each at its centre (scene frame) and rotation."""
+    raw = magnet._get("extra", [])
+    if not isinstance(raw, list) or not all(isinstance(item, dict) for item in raw):
+        raise SpecError(f"magnet.extra: expected [[magnet.extra]] tables, got {raw!r}")
+    magnets = []
+    for index, item in enumerate(raw):
+        name = f"magnet.extra[{index}]"
+        table = Table({name: item}, name)
+        moves = table._get("moves", True)
+        if not isinstance(moves, bool):
+            raise SpecError(f"{name}.moves: expected true or false, got {moves!r}")
+        magnets.append(
+            Magnet(
+                radius=jnp.asarray(table.quantity("radius", "m")),
+                height=jnp.asarray(table.quantity("height", "m")),
+                polarization=jnp.asarray(table.quantities("polarization", "T", length=3)),
+                centre=jnp.asarray(table.quantities("position", "m", length=3)),
+                angles=jnp.asarray(table.quantities("rotation", "rad", length=3, default=[0.0, 0.0, 0.0])),
+                moves=moves,
+            )
+        )
+        table.done()
+    return tuple(magnets)
+
+
 def _cylinder_scene(spec, fidelity):
     magnet = Table(spec, "magnet")
     magnet.choice("shape", ("cylinder",))
     radius, height = magnet.quantity("radius", "m"), magnet.quantity("height", "m")
     remanence = magnet.quantity("remanence", "T")
     field_fidelity = magnet.choice("fidelity", CYLINDER_FIDELITIES, default="exact")
+    direction = _optional_vector(magnet, "direction", "1")
+    if direction is not None:
+        norm = float(jnp.linalg.norm(direction))
+        if norm == 0.0:
+            raise SpecError("magnet.direction: expected a nonzero vector [x, y, z], got zeros")
+        direction = direction / norm
+    offset = _optional_vector(magnet, "offset", "m")
+    magnet_angles = _optional_vector(magnet, "rotation", "rad")
+    extra = _extra_magnets(magnet)
     magnet.done()
+    posed = [key for key, value in (("direction", direction), ("offset", offset), ("rotation", magnet_angles)) if value is not None]
+    if field_fidelity == "axis" and (posed or extra):
+        key = posed[0] if posed else "extra"
+        raise SpecError(f"magnet.{key}: fidelity 'axis' holds for one axial magnet on the sensors' axis; use 'exact'")
     mechanics = _mechanics(spec, fidelity)
     sensor = Table(spec, "sensor")
     model = sensor.choice("model", ("hall3d", "spin_valve", "gmr"))
@@ -233,6 +279,10 @@ def _cylinder_scene(spec, fidelity):
         effects=effects,
         inductors=inductors,
         fidelity=field_fidelity,
+        direction=direction,
+        offset=offset,
+        angles=magnet_angles,
+        extra=extra,
     )
 
 
@@ -241,6 +291,7 @@ def _film_scene(spec, fidelity):
     magnet.choice("shape", ("film",))
     period, thickness = magnet.quantity("period", "m"), magnet.quantity("thickness", "m")
     magnetization = magnet.quantity("magnetization", "T")
+    periods = magnet.integer("periods", default=None)  # None: an infinite film
     magnet.done()
     layer = _mechanics(spec, fidelity, models=("layer",))
     sensor = Table(spec, "sensor")
@@ -259,6 +310,7 @@ def _film_scene(spec, fidelity):
         hall=hall,
         effects=_hall_effects(spec, hall),
         grid=grid,
+        periods=periods,
     )
 
 

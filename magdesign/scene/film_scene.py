@@ -1,15 +1,28 @@
 """Seed 004: a sinusoidally magnetised film on an elastomer layer over Hall taxels.
 
-The film (period T, thickness d, field scale M0; :mod:`magdesign.fields.film`) lies on
-an elastomer layer of thickness h; the taxels sit on the layer's bottom face (z = 0)
-on a square grid. A load moves the whole film: normal force Fz by -Fz / k_n along z
-(towards the taxels), shear (Fx, Fy) by F / k_s, with the layer stiffness k_n, k_s of
+Scene frame: z points up, from the taxels towards the film. The film (period T,
+thickness d, polarization amplitude J0; :mod:`magdesign.fields.film`) lies on an
+elastomer layer of thickness h: its bottom face at z = h, its pattern
+J = J0 (-sin kx, 0, -cos kx) in this frame (the film frame's depth axis points down),
+strong side down. The taxels sit on the layer's bottom face (z = 0) on a square grid
+centred on the origin. Below an infinite film the field in this frame is
+
+    B = J0 (1 - e^{-kd}) e^{-k (h - z)} (sin kx, 0, -cos kx)
+
+a valid field here (div B = curl B = 0, tested), so effects given in the scene frame
+(a background field) add to it with their true relative sign. ``periods = N`` makes
+the film a strip N periods wide (exact field, :func:`magdesign.fields.film`), centred
+over the grid; None is the infinite film.
+
+A load moves the whole film: normal force Fz by -Fz / k_n along z (towards the
+taxels), shear (Fx, Fy) by F / k_s, with the layer stiffness k_n, k_s of
 :func:`magdesign.mechanics.layer_stiffness` for the contact area S. The film is
 uniform along y, so only the x shear changes the field.
 
-Outputs (:meth:`FilmScene.outputs`):
-    field_fraction      |B| at the taxels over |B| at the film's face, e^{-k h} (-)
-    normal_sensitivity  d|B| / dFz at the taxels at rest (T/N)
+Outputs (:meth:`FilmScene.outputs`), at the grid's centre (the origin):
+    field_fraction      |B| at the taxel plane over |B| at the film's face (-);
+                        e^{-k h} for the infinite film
+    normal_sensitivity  d|B| / dFz there at rest (T/N); k |B| / k_n for the infinite film
     shear_phase_max     k times the largest shear displacement of the sweep (rad)
     normal_compliance   1 / k_n (m/N);  shear_compliance  1 / k_s (m/N)
 """
@@ -17,10 +30,11 @@ Outputs (:meth:`FilmScene.outputs`):
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from magdesign.fields import film, film_magnitude
+from magdesign.fields import film
 from magdesign.scene.core import AbstractScene
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.mechanics import Layer
@@ -37,7 +51,10 @@ def grid_positions(shape: tuple[int, int], pitch) -> Float[Array, "s 3"]:
 
 
 class FilmScene(AbstractScene):
-    """Seed 004 (see the module docstring); all lengths (m), M0 (T), area (m^2)."""
+    """Seed 004 (see the module docstring); all lengths (m), J0 (T), area (m^2).
+
+    ``periods`` (static): None for an infinite film, N for a strip N periods wide.
+    """
 
     period: Float[Array, ""]
     film_thickness: Float[Array, ""]
@@ -48,6 +65,7 @@ class FilmScene(AbstractScene):
     hall: Hall3D
     effects: tuple[AbstractEffect, ...]
     grid: tuple[int, int] = eqx.field(static=True)
+    periods: int | None = eqx.field(static=True, default=None)
 
     SOURCE_KEY: ClassVar = "magnet.magnetization"
     reading_labels: ClassVar = ("Bx", "By", "Bz")
@@ -80,15 +98,18 @@ class FilmScene(AbstractScene):
         return self.layer.displacement(loads)
 
     def source_field(self, points, displacement):
+        # film frame: x from the film's centre, z the depth below its bottom face (down)
         depth = self.layer.thickness + displacement[2] - points[..., 2]
-        bx, bz = film(
+        bx, b_depth = film(
             points[..., 0] - displacement[0],
             depth,
             period=self.period,
             thickness=self.film_thickness,
             magnetization=self.magnetization,
+            periods=self.periods,
         )
-        return jnp.stack([bx, jnp.zeros_like(bx), bz], axis=-1)
+        # back to the scene frame: its z axis is the film frame's depth axis reversed
+        return jnp.stack([bx, jnp.zeros_like(bx), -b_depth], axis=-1)
 
     def transduce(self, field):
         return field
@@ -96,12 +117,17 @@ class FilmScene(AbstractScene):
     def outputs(self):
         k = 2.0 * jnp.pi / self.period
         stiffness = self.layer.stiffness
-        at_taxels = film_magnitude(
-            self.layer.thickness, period=self.period, thickness=self.film_thickness, magnetization=self.magnetization
-        )
+        centre = jnp.zeros(3)
+
+        def magnitude(normal_travel):
+            """|B| at the grid's centre with the film moved down by ``normal_travel`` (m)."""
+            return jnp.linalg.norm(self.source_field(centre, jnp.array([0.0, 0.0, -1.0]) * normal_travel))
+
+        at_taxels, slope = jax.jvp(magnitude, (jnp.zeros(()),), (jnp.ones(()),))
+        at_face = magnitude(self.layer.thickness)
         return {
-            "field_fraction": jnp.exp(-k * self.layer.thickness),
-            "normal_sensitivity": k * at_taxels / stiffness.normal,
+            "field_fraction": at_taxels / at_face,
+            "normal_sensitivity": slope / stiffness.normal,
             "shear_phase_max": k * self.max_shear / stiffness.shear,
             "normal_compliance": 1.0 / stiffness.normal,
             "shear_compliance": 1.0 / stiffness.shear,

@@ -3,6 +3,11 @@
 Scene frame: the reference sensor plane is z = 0; at rest the magnet's near (bottom)
 face is ``gap`` above it, its axis along z through the origin, magnetised along +z
 (:func:`magdesign.fields.cylinder`, exact fidelity unless the spec says otherwise).
+Where the spec asks for it, the magnet's polarization has another ``direction`` (a unit
+vector in its own frame: axial plus diametral parts), its pose an ``offset`` (m) from that
+centre and a rotation ``angles`` (rad, as a chip's, :mod:`magdesign.scene.pose`), and
+further magnets (``extra``, :class:`magdesign.scene.pose.Magnet`), carried with it or
+fixed, add their fields.
 Sensors sit at given positions (a reference sensor at the origin for seed 001; a
 4 x 2 matrix for seed 002; four GMR at several depths for seed 003). A press moves
 the magnet by -z towards them (seed 002's chips move towards a fixed magnet: the
@@ -28,11 +33,10 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from magdesign.fields import cylinder
 from magdesign.scene.core import MECHANICS_CONVERGED, AbstractScene
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.mechanics import AbstractMechanics
-from magdesign.scene.pose import rotation, to_chip
+from magdesign.scene.pose import Magnet, posed_cylinder, rotation, to_chip
 from magdesign.transducers import emf, slip_flags, Hall3D, SpinValve
 
 # Load points from zero to the largest force over which the in-plane outputs are taken.
@@ -86,6 +90,10 @@ class MagnetScene(AbstractScene):
     effects: tuple[AbstractEffect, ...]
     inductors: Inductors | None = None
     fidelity: str = eqx.field(static=True, default="exact")
+    direction: Float[Array, "3"] | None = None
+    offset: Float[Array, "3"] | None = None
+    angles: Float[Array, "3"] | None = None
+    extra: tuple[Magnet, ...] = ()
 
     SOURCE_KEY = "magnet.remanence"
     OUTPUT_UNITS: ClassVar[dict[str, str]] = {
@@ -129,15 +137,25 @@ class MagnetScene(AbstractScene):
     def displacement(self, loads):
         return self.mechanics.displacement(loads)
 
+    def magnet_centre(self):
+        """The main magnet's centre at rest (m, scene frame)."""
+        centre = jnp.array([0.0, 0.0, 1.0]) * (self.gap + self.height / 2)
+        return centre if self.offset is None else centre + self.offset
+
     def source_field(self, points, displacement):
-        centre = jnp.array([0.0, 0.0, 1.0]) * (self.gap + self.height / 2) + displacement
-        return cylinder(
-            points - centre,
+        polarization = self.remanence if self.direction is None else self.remanence * self.direction
+        field = posed_cylinder(
+            points,
+            centre=self.magnet_centre() + displacement,
+            angles=self.angles,
             radius=self.radius,
             height=self.height,
-            polarization=self.remanence,
+            polarization=polarization,
             fidelity=self.fidelity,
         )
+        for magnet in self.extra:
+            field = field + magnet.field(points, displacement, self.fidelity)
+        return field
 
     def transduce(self, field):
         if isinstance(self.transducer, Hall3D):

@@ -1,17 +1,20 @@
-"""Rotations of sensor chips: the chip frame of seed 002, Eqs. 3-4.
+"""Poses: the rotation of sensor chips (seed 002, Eqs. 3-4) and of magnets.
 
-A chip's orientation is three angles (alpha, beta, gamma) (rad); a field H given in
-the scene (world) frame reads, in the chip frame (a, b, c),
+An orientation is three angles (alpha, beta, gamma) (rad); a vector v given in the scene
+(world) frame reads, in the body's own frame,
 
-    H_chip = Rx(alpha) Ry(beta) Rz(gamma) H
+    v_body = Rx(alpha) Ry(beta) Rz(gamma) v
 
-with ``a`` the chip's sensitive in-plane axis and ``c`` its normal
-(:func:`magdesign.transducers.rotation_matrix`).
+(:func:`magdesign.transducers.rotation_matrix`). For a chip the body frame is (a, b, c),
+``a`` its sensitive in-plane axis and ``c`` its normal; for a magnet it is the frame of
+:func:`magdesign.fields.cylinder` (centre at the origin, axis z).
 """
 
+import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from magdesign.fields import cylinder
 from magdesign.transducers import rotation_matrix
 
 
@@ -24,3 +27,47 @@ def rotation(angles: Float[ArrayLike, "... 3"]) -> Float[Array, "... 3 3"]:
 def to_chip(rotations: Float[ArrayLike, "s 3 3"], field: Float[ArrayLike, "*n s 3"]) -> Float[Array, "*n s 3"]:
     """The field (T) expressed in each chip's frame: ``rotations @ field`` per chip."""
     return jnp.einsum("...ij,...j->...i", rotations, field)
+
+
+def posed_cylinder(
+    points: Float[ArrayLike, "... 3"],
+    *,
+    centre: Float[ArrayLike, "3"],
+    angles: Float[ArrayLike, "3"] | None,
+    radius,
+    height,
+    polarization,
+    fidelity: str = "exact",
+) -> Float[Array, "... 3"]:
+    """Flux density (T, scene frame) at ``points`` (m, scene frame) of a cylinder whose
+    centre is at ``centre`` (m) and whose orientation is ``angles`` (rad, None: its axis
+    along the scene's z); ``polarization`` (T) a scalar along its axis or a vector in its
+    own frame (:func:`magdesign.fields.cylinder`)."""
+    local = jnp.asarray(points) - centre
+    if angles is None:
+        return cylinder(local, radius=radius, height=height, polarization=polarization, fidelity=fidelity)
+    matrix = rotation(angles)
+    field = cylinder(to_chip(matrix, local), radius=radius, height=height, polarization=polarization, fidelity=fidelity)
+    return jnp.einsum("ji,...j->...i", matrix, field)
+
+
+class Magnet(eqx.Module):
+    """A further cylinder magnet of a scene: radius, height (m), polarization (3,) (T, in
+    its own frame), centre (3,) (m, scene frame, at rest), angles (3,) (rad; its
+    orientation, as a chip's); ``moves`` (static): carried with the main magnet by the
+    load, or fixed in the scene."""
+
+    radius: Float[Array, ""]
+    height: Float[Array, ""]
+    polarization: Float[Array, "3"]
+    centre: Float[Array, "3"]
+    angles: Float[Array, "3"]
+    moves: bool = eqx.field(static=True, default=True)
+
+    def field(self, points, displacement, fidelity="exact"):
+        """Flux density (T, scene frame) at ``points`` with the load's ``displacement`` (m)."""
+        centre = self.centre + displacement if self.moves else self.centre
+        return posed_cylinder(
+            points, centre=centre, angles=self.angles, radius=self.radius, height=self.height,
+            polarization=self.polarization, fidelity=fidelity,
+        )

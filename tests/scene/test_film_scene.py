@@ -1,4 +1,5 @@
-"""Seed 004: self-decoupling of the ideal film model and the Eq. 3 read-out."""
+"""Seed 004 in the scene frame: a valid field, the self-decoupling of the ideal film
+model, the Eq. 3 read-out, and the example design against its closed form."""
 
 import dataclasses
 
@@ -7,6 +8,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from magdesign.design import solve
+from magdesign.design.spec import problem_from_spec
 from magdesign.fields import film_angle
 from magdesign.inverse import film_forces
 from magdesign.scene import Loads, outputs, parameters, scene_from_spec, simulate, with_parameters
@@ -22,7 +25,45 @@ def ideal():
 
 
 def _magnitude_and_angle(readings):
-    return jnp.linalg.norm(readings, axis=-1), film_angle(readings[..., 0], readings[..., 2])
+    # the film frame's angle: its depth axis is the scene's -z
+    return jnp.linalg.norm(readings, axis=-1), film_angle(readings[..., 0], -readings[..., 2])
+
+
+@pytest.mark.parametrize("periods", [None, 3])
+def test_field_is_divergence_and_curl_free_in_the_scene_frame(ideal, periods):
+    scene = dataclasses.replace(ideal, periods=periods)
+    rng = np.random.default_rng(0)
+    points = np.concatenate([rng.uniform(-12e-3, 12e-3, (40, 2)), rng.uniform(-5e-3, 3.4e-3, (40, 1))], -1)
+    displacement = jnp.array([0.4e-3, 0.0, -0.2e-3])
+
+    def field(p):
+        return scene.source_field(p, displacement)
+
+    jac = np.asarray(jax.jit(jax.vmap(jax.jacfwd(field)))(jnp.asarray(points)))
+    scale = 2 * np.pi / 6e-3 * np.linalg.norm(np.asarray(jax.vmap(field)(jnp.asarray(points))), axis=-1)
+    curl = np.stack([jac[:, 2, 1] - jac[:, 1, 2], jac[:, 0, 2] - jac[:, 2, 0], jac[:, 1, 0] - jac[:, 0, 1]], -1)
+    assert np.max(np.abs(np.trace(jac, axis1=1, axis2=2)) / scale) < 1e-12
+    assert np.max(np.linalg.norm(curl, axis=-1) / scale) < 1e-12
+
+
+def test_scene_field_signs_below_an_infinite_film(ideal):
+    """z up: below the film Bx / Bz = -tan(kx) for J = J0 (-sin kx, 0, -cos kx) (PHYSICS.md 1.2
+    with J0 -> -J0), and a background given in the scene frame adds with its own sign."""
+    k, h, d, j0 = 2 * np.pi / 6e-3, 3.5e-3, 0.5e-3, 85e-3
+    x = np.linspace(-1.4e-3, 1.4e-3, 5)
+    points = np.stack([x, 0 * x, 0 * x], -1)
+    field = np.asarray(ideal.source_field(jnp.asarray(points), jnp.zeros(3)))
+    magnitude = j0 * (1 - np.exp(-k * d)) * np.exp(-k * h)
+    np.testing.assert_allclose(field, magnitude * np.stack([np.sin(k * x), 0 * x, -np.cos(k * x)], -1), rtol=1e-13)
+    with_background = dataclasses.replace(scene_from_spec(example("film_hall")), effects=())
+    spec = example("film_hall")
+    spec["scene"] = {"effects": ["background"], "background": ["0 T", "0 T", "-50 uT"]}
+    loads = Loads(np.zeros(1))
+    plain = simulate(with_background, loads).field
+    shifted = simulate(scene_from_spec(spec), loads).field
+    np.testing.assert_allclose(shifted - plain, np.broadcast_to([0.0, 0.0, -50e-6], plain.shape), atol=1e-18)
+    centre = np.asarray(plain)[0, 4]  # the centre taxel, x = 0: the film's field points down there
+    assert centre[2] < 0 and np.linalg.norm(shifted[0, 4]) > np.linalg.norm(centre)
 
 
 def test_normal_changes_magnitude_only_and_shear_angle_only(ideal):
@@ -44,6 +85,19 @@ def test_eq3_readout_recovers_forces(ideal):
     fz_hat, fx_hat = film_forces(ideal, readings[0], readings)
     np.testing.assert_allclose(fz_hat, fz, rtol=0, atol=1e-12)
     np.testing.assert_allclose(fx_hat, fx, rtol=0, atol=1e-12)
+
+
+def test_example_design_reaches_its_closed_form():
+    """examples/film_hall.toml: e^{-kh} = f fixes k h = ln(1/f); then the normal sensitivity
+    k |B|(h) / k_n = J0 (1 - e^{-kd}) f ln(1/f) / (E S) (Hooke layer, k_n = E S / h) fixes T."""
+    problem, _ = problem_from_spec(example("film_hall"))
+    result = solve(problem)
+    fraction, sensitivity, j0, d, youngs, area = 0.02, 1e-3, 85e-3, 0.5e-3, 83e3, 36e-6
+    kd = -np.log(1 - sensitivity * youngs * area / (j0 * fraction * np.log(1 / fraction)))
+    period = 2 * np.pi * d / kd
+    assert result.status == "successful"
+    assert result.parameters["magnet.period"] == pytest.approx(period, rel=1e-9)
+    assert result.parameters["mechanics.thickness"] == pytest.approx(np.log(1 / fraction) * period / (2 * np.pi), rel=1e-9)
 
 
 def test_outputs_match_closed_forms(ideal):
