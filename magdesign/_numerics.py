@@ -90,6 +90,14 @@ DESIGN_ON_CONSTRAINT = 1e-9
 #   DESIGN_ESCAPES times.
 DESIGN_CURVATURE_TOL = 1e-7
 DESIGN_ESCAPES = 4
+# - the active constraints' null space: directions whose singular value is below this,
+#   relative to the largest, are free (the rows are O(1) gradients, so 1e-9 separates a
+#   dependent row from rounding by several decades either way);
+DESIGN_NULL_SPACE_RTOL = 1e-9
+# - the polish (a Newton root find on the KKT or feasibility equations) refines the
+#   search's point; a root further than this (scaled variables, box width 1) from it is
+#   another solution of the equations, and the search's point stands.
+DESIGN_POLISH_REACH = 1e-4
 
 
 # Width of the smoothed contact ramp, as a fraction of the length it is applied to (the

@@ -52,9 +52,12 @@ from magdesign._numerics import (
     DESIGN_ELASTIC,
     DESIGN_ESCAPES,
     DESIGN_HESSIAN_FLOOR,
+    DESIGN_NULL_SPACE_RTOL,
     DESIGN_ON_CONSTRAINT,
+    DESIGN_POLISH_REACH,
     DESIGN_RTOL,
     DESIGN_START_NUDGE,
+    TINY,
     safe_div,
 )
 from magdesign.design._qp import solve_qp
@@ -282,12 +285,12 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, n_targets):
     lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
     rows = jnp.concatenate([jnp.where(strong[:, None], jet.J[1:], 0.0), jnp.where((lower | upper)[:, None], jnp.eye(n), 0.0)])
     _, singular, vt = jnp.linalg.svd(rows, full_matrices=True)  # (n,) singular values: rows has m + n >= n
-    null = singular <= 1e-9 * jnp.max(singular, initial=0.0)
+    null = singular <= DESIGN_NULL_SPACE_RTOL * jnp.max(singular, initial=0.0)
     basis = vt.T * null  # (n, n), columns outside the null space zeroed
     eigenvalues, vectors = jnp.linalg.eigh(basis.T @ hessian @ basis)
     size = 1.0 + jnp.max(jnp.abs(jnp.linalg.eigvalsh(hessian)))
     v = basis @ vectors[:, 0]
-    return eigenvalues[0] / size, v / jnp.maximum(jnp.max(jnp.abs(v)), 1e-300)
+    return eigenvalues[0] / size, v / jnp.maximum(jnp.max(jnp.abs(v)), TINY)
 
 
 def _room(y, v, y_max):
@@ -514,7 +517,7 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     kept = (
         jnp.all(jnp.isfinite(y))
         & jnp.all((y >= -DESIGN_ON_CONSTRAINT) & (y <= y_max + DESIGN_ON_CONSTRAINT))
-        & (jnp.max(jnp.abs(y - y_start)) <= 1e-4)
+        & (jnp.max(jnp.abs(y - y_start)) <= DESIGN_POLISH_REACH)
     )
     y = jnp.where(kept, jnp.clip(y, 0.0, y_max), y_start)
     outputs = jnp.where(kept, outputs, search.jet.outputs)
