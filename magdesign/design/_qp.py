@@ -12,6 +12,16 @@ the design solver's problems (a few variables, a few dozen rows).
 
 The problems are tiny, so everything is dense; the loop runs a fixed maximum of iterations
 and stops early where all residuals are small, which keeps it vmappable.
+
+Successive steps of the design solver mostly share their active set, so the solver passes
+the rows it found active at the last step as a guess, and the QP is first solved by a few
+rounds of the primal-dual active-set method (Hintermueller, Ito and Kunisch 2002): solve
+with the guessed rows as equations and the others dropped (one linear solve), then keep the
+rows with a positive multiplier and add the dropped rows that the answer violates. An answer
+is taken only where it satisfies every optimality condition (for a convex QP they are
+sufficient); where no round gives one (a cycle, or dependent rows), the interior-point
+method runs. On the default design the first step takes two rounds and the others one,
+against about 20 interior-point iterations of twice the size.
 """
 
 import equinox as eqx
@@ -21,6 +31,8 @@ from jaxtyping import Array, Bool, Float, Int
 
 # Fraction of the way to the boundary of s, z >= 0 that a step may go.
 _TO_BOUNDARY = 0.99
+# Rounds of the active-set method tried before the interior-point method.
+_ACTIVE_SET_ROUNDS = 6
 
 
 class QPSolution(eqx.Module):
@@ -35,11 +47,40 @@ class QPSolution(eqx.Module):
     iterations: Int[Array, ""]
 
 
-def solve_qp(Q, q, A, b, G, h, *, tol=1e-12, max_iterations=60) -> QPSolution:
+def _solve_on_active_set(Q, q, A, b, G, h, guess, tol):
+    """The QP's solution if the rows ``guess`` (mi,) are exactly its active ones: (w, y, z,
+    ok), ok where the answer meets every optimality condition to ``tol`` (row by row, as
+    the interior-point method's own test): stationarity, the equations, the dropped rows
+    held, the kept rows' multipliers non-negative."""
+    nw, me, mi = Q.shape[0], A.shape[0], G.shape[0]
+    kept = guess.astype(Q.dtype)
+    matrix = jnp.block(
+        [
+            [Q, A.T, G.T],
+            [A, jnp.zeros((me, me + mi))],
+            # A kept row holds as an equation; a dropped row has no multiplier.
+            [kept[:, None] * G, jnp.zeros((mi, me)), jnp.diag(1.0 - kept)],
+        ]
+    )
+    solution = jnp.linalg.solve(matrix, jnp.concatenate([-q, b, kept * h]))
+    w, y, z = jnp.split(solution, [nw, nw + me])
+    ok = (
+        jnp.all(jnp.isfinite(solution))
+        & jnp.all(jnp.abs(Q @ w + q + A.T @ y + G.T @ z) <= tol * (1.0 + jnp.abs(q)))
+        & jnp.all(jnp.abs(A @ w - b) <= tol * (1.0 + jnp.abs(b)))
+        & jnp.all(G @ w - h <= tol * (1.0 + jnp.abs(h)))
+        & jnp.all(z >= -tol)
+    )
+    return w, y, jnp.maximum(z, 0.0), ok
+
+
+def solve_qp(Q, q, A, b, G, h, *, guess=None, tol=1e-12, max_iterations=60) -> QPSolution:
     """Solve the QP above (shapes Q (nw, nw), q (nw,), A (me, nw), b (me,), G (mi, nw),
     h (mi,)); ``A`` must have full row rank and the feasible set must be non-empty and
     bounded in the directions where Q is singular (the design solver's QPs have box rows
-    for every variable and elastic slacks, so both hold)."""
+    for every variable and elastic slacks, so both hold). ``guess`` (mi,) bool: the rows
+    expected to be active (see the module docstring); ``iterations`` is 0 where it was
+    right."""
     nw, me, mi = Q.shape[0], A.shape[0], G.shape[0]
 
     def residuals(w, y, z, s):
@@ -101,6 +142,26 @@ def solve_qp(Q, q, A, b, G, h, *, tol=1e-12, max_iterations=60) -> QPSolution:
     w0, y0, z0 = first[:nw], first[nw : nw + me], first[nw + me :]
     shift = lambda v: v + jnp.maximum(0.0, 1.0 - jnp.min(v, initial=1.0))  # noqa: E731
     state = (w0, y0, shift(z0), shift(-z0), jnp.asarray(0))
-    state = jax.lax.while_loop(lambda st: ~done(st)[0] & (st[4] < max_iterations), body, state)
+    if guess is None:
+        guessed = jnp.asarray(False)
+    else:
+
+        def active_set_round(round_state):
+            rows, _, _, _, _, k = round_state
+            w, y, z, ok = _solve_on_active_set(Q, q, A, b, G, h, rows, tol)
+            # The rows to keep: those with a positive multiplier, and those violated.
+            rows = jnp.where(ok, rows, (z > 0.0) | (G @ w - h > tol * (1.0 + jnp.abs(h))))
+            return rows, w, y, z, ok, k + 1
+
+        first_round = (guess, jnp.zeros(nw), jnp.zeros(me), jnp.zeros(mi), jnp.asarray(False), jnp.asarray(0))
+        _, w_g, y_g, z_g, guessed, _ = jax.lax.while_loop(
+            lambda st: ~st[4] & (st[5] < _ACTIVE_SET_ROUNDS), active_set_round, first_round
+        )
+    # Not a lax.cond: under vmap both branches would run, the loop to its end.
+    state = jax.lax.while_loop(lambda st: ~guessed & ~done(st)[0] & (st[4] < max_iterations), body, state)
     w, y, z, _, iterations = state
-    return QPSolution(w, y, z, done(state)[0], iterations)
+    converged = done(state)[0]
+    if guess is not None:
+        w, y, z = (jnp.where(guessed, a, b) for a, b in ((w_g, w), (y_g, y), (z_g, z)))
+        converged = guessed | converged
+    return QPSolution(w, y, z, converged, iterations)

@@ -210,6 +210,13 @@ class _Step(eqx.Module):
     active_limits: Bool[Array, " l"]
     at_lower: Bool[Array, " n"]
     at_upper: Bool[Array, " n"]
+    qp_rows: Bool[Array, " mi"]
+
+
+def _no_slack_rows(n, n_targets, n_limits):
+    """The first step's guess of the subproblem's active rows (see :func:`subproblem` for
+    their order): every elastic slack at zero, no limit or bound active."""
+    return jnp.arange(n_limits + 2 * n + 2 * n_targets + n_limits) >= n_limits + 2 * n
 
 
 def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective):
@@ -243,15 +250,16 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective):
     return Q, q, A, -c[:n_targets], G, h
 
 
-def _step(jet, y, y_max, multipliers, weight, n_targets, has_objective):
-    """The :func:`subproblem`'s solution at y. With an objective the active set is the
+def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective):
+    """The :func:`subproblem`'s solution at y, its QP's rows active at the ``last`` step
+    taken as a guess. With an objective the active set is the
     rows and bounds with a positive multiplier; without one the multipliers say nothing,
     and it is the rows and bounds that the step ends on. Returns the :class:`_Step` and
     the bounds' multipliers (2n,): lower, then upper."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     n_limits = c.shape[0] - n_targets
-    qp = solve_qp(*subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective))
+    qp = solve_qp(*subproblem(jet, y, y_max, last.multipliers, weight, n_targets, has_objective), guess=last.qp_rows)
     # A subproblem that failed (non-finite) offers no step; the polish then judges the point.
     qp = jax.tree.map(lambda a: jnp.where(jnp.isfinite(a), a, 0.0) if a.dtype == jnp.float64 else a, qp)
     d = qp.w[:n]
@@ -270,6 +278,7 @@ def _step(jet, y, y_max, multipliers, weight, n_targets, has_objective):
         active_limits=active_limits,
         at_lower=at_lower,
         at_upper=at_upper,
+        qp_rows=qp.z > DESIGN_ACTIVE_MULTIPLIER,
     ), jnp.concatenate([lower_multipliers, upper_multipliers])
 
 
@@ -336,9 +345,7 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
 
     def accept(state, y, jet):
         """Take y as the new point: solve the subproblem there and choose what comes next."""
-        step, bound_multipliers = _step(
-            jet, y, y_max, state.step.multipliers, state.weight, n_targets, problem.objective is not None
-        )
+        step, bound_multipliers = _step(jet, y, y_max, state.step, state.weight, n_targets, problem.objective is not None)
         nu = jnp.maximum(state.nu, 2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0))
         gradient = state.weight * jet.J[0]
         # The merit's directional derivative along the step; never above 0, so that a
@@ -407,7 +414,10 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         phase=jnp.asarray(START),
         y=y0,
         jet=blank_jet,
-        step=_Step(jnp.zeros(n), jnp.zeros(m), jnp.zeros(()), no(m - n_targets), no(n), no(n)),
+        step=_Step(
+            jnp.zeros(n), jnp.zeros(m), jnp.zeros(()), no(m - n_targets), no(n), no(n),
+            _no_slack_rows(n, n_targets, m - n_targets),
+        ),
         bound_multipliers=jnp.zeros(2 * n),
         direction=jnp.zeros(n),
         alpha=jnp.asarray(1.0),
@@ -549,7 +559,8 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
         multipliers=jnp.where(kept, multipliers, multipliers_start)[:m],
         outputs=outputs,
         residuals=c[:m],
-        active_limits=active.limits[: m - n_targets],
+        # Active: held as an equation, or binding (a limit that meets a bound there, degenerate).
+        active_limits=(active.limits | (jnp.abs(c[n_targets:]) <= tol))[: m - n_targets],
         at_lower=active.at_lower,
         at_upper=active.at_upper,
         derivatives=derivatives,
