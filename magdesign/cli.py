@@ -5,15 +5,17 @@
     magdesign accuracy [--json] [--plot FILE]
     magdesign show SPEC.toml --plot FILE
 
-Exit codes: 0 done (solve: solved), 2 bad spec or arguments (one line naming the key),
-3 solve not successful (the status and the violated target are printed) or a simulation
-whose mechanics did not converge at some load point.
+Exit codes: 0 done (solve: solved), 1 internal error (a bug: one line; ``--debug`` shows
+the traceback), 2 bad spec or arguments (one line naming the key), 3 solve not successful
+(the status and the violated target are printed) or a simulation whose mechanics did not
+converge at some load point.
 
 Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax; see
 :func:`cache_directory`; MAGDESIGN_NO_CACHE=1 turns it off).
 """
 
 import argparse
+import importlib.metadata
 import json
 import os
 import sys
@@ -29,6 +31,7 @@ from magdesign.scene import loads_from_spec, scene_from_spec, simulate, simulati
 from magdesign.scene.picture import plot_scene
 from magdesign.units import SpecError
 
+EXIT_INTERNAL = 1
 EXIT_BAD_SPEC = 2
 EXIT_NOT_SOLVED = 3
 # Programs that took longer than this to compile are kept in the persistent cache (JAX's own
@@ -60,7 +63,14 @@ def use_compilation_cache():
 
 
 def build_parser():
-    parser = argparse.ArgumentParser(prog="magdesign", description="Design magnetic tactile sensors by differentiable optimisation.")
+    parser = argparse.ArgumentParser(
+        prog="magdesign",
+        description="Design magnetic tactile sensors by differentiable optimisation.",
+        epilog="Exit codes: 0 done, 1 internal error, 2 bad spec or arguments, 3 not solved (or "
+        "mechanics not converged). Specs are TOML; see examples/ and the README.",
+    )
+    parser.add_argument("--version", action="version", version=f"magdesign {importlib.metadata.version('magdesign')}")
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an internal error")
     sub = parser.add_subparsers(dest="command", required=True)
 
     solve = sub.add_parser("solve", help="solve a design spec (default: the seed-001 dome with a Hall sensor)")
@@ -122,8 +132,30 @@ def run_accuracy(args):
     return 0
 
 
+def check_plot_path(path):
+    """SpecError unless ``path`` is a PNG file that can be written (checked before any
+    solve, so that a long run does not end in an error): a name ending in .png in an
+    existing, writable folder, and not a folder itself."""
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if target.is_dir():
+        raise SpecError(f"--plot {path}: a folder; give the path of the .png file to write")
+    if target.suffix.lower() != ".png":
+        raise SpecError(f"--plot {path}: give a file name ending in .png")
+    if not folder.is_dir():
+        raise SpecError(f"--plot {path}: no folder {folder}")
+    if not os.access(folder, os.W_OK) or (target.exists() and not os.access(target, os.W_OK)):
+        raise SpecError(f"--plot {path}: cannot write there")
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    if getattr(args, "plot", None):
+        try:
+            check_plot_path(args.plot)
+        except SpecError as error:
+            print(f"magdesign {args.command}: {error}", file=sys.stderr)
+            return EXIT_BAD_SPEC
     use_compilation_cache()
     command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy, "show": run_show}[args.command]
     try:
@@ -131,6 +163,18 @@ def main(argv=None):
     except (SpecError, ValueError) as error:
         print(f"magdesign {args.command}: {error}", file=sys.stderr)
         return EXIT_BAD_SPEC
+    except BrokenPipeError:
+        # The reader went away (``magdesign simulate ... | head -1``): stop quietly, and keep
+        # Python's final flush of stdout from failing again.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except Exception as error:
+        if args.debug:
+            raise
+        first_line = (str(error).splitlines() or [""])[0][:200]
+        print(f"magdesign {args.command}: internal error: {type(error).__name__}: {first_line} "
+              "(run with --debug for the traceback)", file=sys.stderr)
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

@@ -56,6 +56,26 @@ _NO_PREFIX = {
 _PREFIX = {"p": 1e-12, "n": 1e-9, "u": 1e-6, "µ": 1e-6, "m": 1e-3, "c": 1e-2, "k": 1e3, "M": 1e6, "G": 1e9}
 _ALIASES = {"Ω": "Ohm", "ohm": "Ohm", "°": "deg"}
 
+# Units deeper or higher than these are typing errors, and would exhaust the recursion or
+# overflow the factor.
+_MAX_UNIT_NESTING = 20
+_MAX_UNIT_POWER = 12
+# Largest magnitude of a quantity in SI units: anything above is a typing error, and
+# would overflow the products of the model (1e200 squared is already inf).
+_LARGEST = 1e200
+# Longest echo of a spec value in an error message (characters).
+_ECHO = 80
+
+
+def _shown(value) -> str:
+    """repr(value), cut to about _ECHO characters for an error message."""
+    try:
+        text = repr(value)
+    except ValueError:  # an integer too long for Python to print
+        text = f"<an integer of about {int(value.bit_length() * math.log10(2))} digits>"
+    return text if len(text) <= _ECHO else f"{text[: _ECHO - 20]}...({len(text)} characters)"
+
+
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 _TOKEN = re.compile(r"\s*(\(|\)|/|\*|\^|-?\d+|[A-Za-zµΩ°%]+)")
 
@@ -80,7 +100,7 @@ def _parse_unit(text):
     """Parse a unit expression ("mm/N", "kg*m/s^2", "mV/(A/m)") to (factor, dimension)."""
     tokens = _TOKEN.findall(text)
     if "".join(tokens) != re.sub(r"\s+", "", text):
-        raise ValueError(f"cannot read unit {text!r}")
+        raise ValueError(f"cannot read unit {_shown(text)}")
     position = 0
 
     def peek():
@@ -89,35 +109,40 @@ def _parse_unit(text):
     def take():
         nonlocal position
         position += 1
-        return tokens[position - 1]
+        return tokens[position - 1] if position <= len(tokens) else None
 
-    def atom():
-        token = take() if peek() is not None else None
+    def atom(depth):
+        token = take()
         if token == "(":
-            value = expression()
+            if depth >= _MAX_UNIT_NESTING:
+                raise ValueError(f"parentheses nested deeper than {_MAX_UNIT_NESTING} in unit {_shown(text)}")
+            value = expression(depth + 1)
             if take() != ")":
-                raise ValueError(f"unbalanced parentheses in {text!r}")
+                raise ValueError(f"unbalanced parentheses in unit {_shown(text)}")
         elif token is None or token in ")/*^":
-            raise ValueError(f"cannot read unit {text!r}")
+            raise ValueError(f"cannot read unit {_shown(text)}")
         else:
             value = _unit_atom(token)
         if peek() == "^":
             take()
-            value = _combine((1.0, _DIMENSIONLESS), value, int(take()))
+            power = take()
+            if power is None or not re.fullmatch(r"-?\d+", power) or abs(int(power)) > _MAX_UNIT_POWER:
+                raise ValueError(f"cannot read unit {_shown(text)}: a power is an integer from -{_MAX_UNIT_POWER} to {_MAX_UNIT_POWER}")
+            value = _combine((1.0, _DIMENSIONLESS), value, int(power))
         return value
 
-    def expression():
-        value = atom()
+    def expression(depth):
+        value = atom(depth)
         while peek() not in (None, ")"):
             power = -1 if peek() == "/" else 1
             if peek() in ("/", "*"):
                 take()
-            value = _combine(value, atom(), power)
+            value = _combine(value, atom(depth), power)
         return value
 
-    result = expression()
-    if position != len(tokens):
-        raise ValueError(f"cannot read unit {text!r}")
+    result = expression(0)
+    if position != len(tokens) or not math.isfinite(result[0]) or result[0] == 0.0:
+        raise ValueError(f"cannot read unit {_shown(text)}")
     return result
 
 
@@ -138,29 +163,38 @@ def parse(value, unit, *, key):
 
     Raises:
         SpecError: the value is not a number, has no unit where one is needed,
-            or its unit is of another dimension than ``unit``.
+            its unit is of another dimension than ``unit`` or cannot be read, or it is
+            not finite or above 1e200 in SI units.
     """
     _, expected_dim = _parse_unit(unit)
     example = f"e.g. \"1 {unit}\"" if unit != "1" else "a plain number"
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-        raise SpecError(f"{key}: expected a quantity in {unit} ({example}), got {value!r}")
-    if not isinstance(value, str):
-        return float(value)
-    match = _NUMBER.match(value)
-    if match is None:
-        raise SpecError(f"{key}: expected a quantity in {unit} ({example}), got {value!r}")
-    number, unit_text = float(match.group(1)), match.group(2)
-    if not unit_text:
-        if expected_dim == _DIMENSIONLESS:
-            return number
-        raise SpecError(f"{key}: missing unit in {value!r}; expected a quantity in {unit} ({example})")
+        raise SpecError(f"{key}: expected a quantity in {unit} ({example}), got {_shown(value)}")
+    if isinstance(value, str):
+        match = _NUMBER.match(value)
+        if match is None:
+            raise SpecError(f"{key}: expected a quantity in {unit} ({example}), got {_shown(value)}")
+        number, unit_text = float(match.group(1)), match.group(2)
+        if unit_text:
+            try:
+                factor, dim = _parse_unit(unit_text)
+            except ValueError as error:
+                raise SpecError(f"{key}: {error} in {_shown(value)}; expected a quantity in {unit}") from None
+            if dim != expected_dim:
+                raise SpecError(f"{key}: wrong unit {_shown(unit_text)} in {_shown(value)}; expected a quantity in {unit}")
+        elif expected_dim == _DIMENSIONLESS:
+            factor = 1.0
+        else:
+            raise SpecError(f"{key}: missing unit in {_shown(value)}; expected a quantity in {unit} ({example})")
+    else:
+        number, factor = value, 1.0
     try:
-        factor, dim = _parse_unit(unit_text)
-    except ValueError as error:
-        raise SpecError(f"{key}: {error} in {value!r}; expected a quantity in {unit}") from None
-    if dim != expected_dim:
-        raise SpecError(f"{key}: wrong unit {unit_text!r} in {value!r}; expected a quantity in {unit}")
-    return number * factor
+        si = float(number) * factor
+    except OverflowError:
+        si = math.inf
+    if not math.isfinite(si) or abs(si) > _LARGEST:
+        raise SpecError(f"{key}: {_shown(value)} is not a finite quantity in {unit} of a usable size (below 1e200 in SI)")
+    return si
 
 
 def written_unit(value):

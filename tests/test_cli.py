@@ -116,3 +116,63 @@ def test_show_needs_a_plot_file_and_a_good_spec(capsys, tmp_path):
     path.write_text((EXAMPLES / "dome_hall.toml").read_text().replace('radius = "1.5 mm"', 'radius = "1.5"'))
     assert main(["show", str(path), "--plot", str(tmp_path / "x.png")]) == 2
     assert "magnet.radius" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize(
+    "content, fragment",
+    [
+        (bytes(range(256)) * 4, "not a text file"),  # a binary file
+        (("a = " + "[" * 5000 + "]" * 5000).encode(), "nested too deep"),  # RecursionError in the reader
+        ('radius = "1 mm^"', "magnet.radius"),  # IndexError in the unit parser
+        ('radius = "1 km^200"', "magnet.radius"),  # OverflowError
+        ("radius = nan", "magnet.radius"),
+        ('radius = "1e999 mm"', "magnet.radius"),
+    ],
+)
+def test_broken_files_exit_2_with_one_line(tmp_path, capsys, content, fragment):
+    if isinstance(content, str):  # the default spec's magnet radius replaced
+        text = (EXAMPLES / "dome_hall.toml").read_text()
+        assert 'radius = "1.5 mm"' in text
+        content = text.replace('radius = "1.5 mm"', content, 1).encode()
+    path = tmp_path / "broken.toml"
+    path.write_bytes(content)
+    assert main(["simulate", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and fragment in err and len(err) < 400, err
+
+
+def test_an_internal_error_is_one_line_and_exit_1_and_debug_shows_it(monkeypatch, capsys):
+    import magdesign.cli as cli
+
+    def broken(args):
+        raise ZeroDivisionError("a bug\nwith a second line")
+
+    monkeypatch.setattr(cli, "run_simulate", broken)
+    assert main(["simulate", "any.toml"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.splitlines() == ["magdesign simulate: internal error: ZeroDivisionError: a bug (run with --debug for the traceback)"]
+    with pytest.raises(ZeroDivisionError):
+        main(["--debug", "simulate", "any.toml"])
+
+
+def test_version_and_a_closed_pipe():
+    version = subprocess.run([sys.executable, "-m", "magdesign", "--version"], capture_output=True, text=True)
+    assert version.returncode == 0 and version.stdout.startswith("magdesign ")
+    # simulate | head -1: the reader leaves after one line; no traceback.
+    simulate = subprocess.Popen([sys.executable, "-m", "magdesign", "simulate", str(EXAMPLES / "dome_hall.toml")],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    simulate.stdout.readline()
+    simulate.stdout.close()
+    err = simulate.stderr.read().decode()
+    assert simulate.wait() == 0 and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("plot", ["{tmp}", "{tmp}/no/such/folder/x.png", "{tmp}/picture"])
+def test_a_plot_path_that_cannot_be_written_is_refused_before_the_solve(tmp_path, capsys, plot):
+    """A folder (once silently written as folder.png), a missing folder, a name without
+    .png: exit 2 at once, and nothing written."""
+    plot = plot.format(tmp=tmp_path)
+    assert main(["solve", "--plot", plot]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and "--plot" in captured.err and len(captured.err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []

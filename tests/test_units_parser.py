@@ -52,3 +52,40 @@ def test_parse_errors_name_the_key_and_the_unit(value, fragment):
 def test_convert_inverts_unit_factor():
     assert unit_factor("mm/N") == pytest.approx(1e-3)
     assert convert(7.4458e-3, "mm") == pytest.approx(7.4458)
+
+
+@pytest.mark.parametrize(
+    "value",
+    [
+        "1 mm^",  # a power with no exponent
+        "1 km^200",  # a factor that overflows
+        "1 mm^x",
+        "1 (mm",
+        "1 " + "(" * 3000 + "mm" + ")" * 3000,  # nesting that would exhaust the recursion
+        "(" * 3000 + "1 mm" + ")" * 3000,
+        "1 " + "*".join(["km"] * 400),  # a factor of 1e1200: inf
+        float("nan"),
+        float("inf"),
+        -float("inf"),
+        1e308,
+        10**100_000,  # too long for Python to print or convert
+        "1e999 mm",
+        "nan mm",
+        "x" * 200_000,
+    ],
+    ids=lambda value: type(value).__name__,
+)
+def test_hostile_values_give_one_short_line_naming_the_key(value):
+    """Every broken quantity is a SpecError (never IndexError, OverflowError,
+    RecursionError or a silent inf / NaN), one line that names the key and echoes at most
+    about 80 characters of the value."""
+    with pytest.raises(SpecError) as error:
+        parse(value, "m", key="magnet.radius")
+    message = str(error.value)
+    assert message.startswith("magnet.radius:") and "\n" not in message
+    assert len(message) < 400, message
+
+
+def test_largest_usable_quantities_still_read():
+    assert parse("1e190 Pa", "Pa", key="k") == pytest.approx(1e190)
+    assert parse("2 mm^12", "m^12", key="k") == pytest.approx(2e-36)

@@ -62,6 +62,10 @@ def load_spec(path) -> dict:
         raise SpecError(f"{path}: cannot read the spec ({error.strerror})") from None
     except tomllib.TOMLDecodeError as error:
         raise SpecError(f"{path}: not valid TOML ({error})") from None
+    except UnicodeDecodeError:
+        raise SpecError(f"{path}: not a text file (TOML is UTF-8)") from None
+    except RecursionError:
+        raise SpecError(f"{path}: arrays or tables nested too deep to read") from None
 
 
 def _table(spec, key, *, required):
