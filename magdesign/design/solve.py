@@ -559,8 +559,9 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
         multipliers=jnp.where(kept, multipliers, multipliers_start)[:m],
         outputs=outputs,
         residuals=c[:m],
-        # Active: held as an equation, or binding (a limit that meets a bound there, degenerate).
-        active_limits=(active.limits | (jnp.abs(c[n_targets:]) <= tol))[: m - n_targets],
+        # Active: held as an equation or binding (a limit that meets a bound there,
+        # degenerate), and never a limit that is violated.
+        active_limits=((active.limits | (jnp.abs(c[n_targets:]) <= tol)) & (c[n_targets:] <= tol))[: m - n_targets],
         at_lower=active.at_lower,
         at_upper=active.at_upper,
         derivatives=derivatives,

@@ -41,6 +41,19 @@ def test_a_limit_at_any_distance_from_a_bound(gap):
     assert result.limits["x"]["active"]
 
 
+def test_a_limit_that_cannot_hold_is_violated_not_active():
+    """minimise x^2 with x <= 2 and x in [3, 4]: the limit cannot hold; the result says
+    limit_violated at x = 3 (closest), and does not call the broken limit active."""
+    problem = Problem(
+        lambda v: {"x": v["x"], "square": v["x"] ** 2}, [Variable("x", 3.0, 4.0)],
+        limits=[Limit("x", upper=2.0, scale=1.0)], objective=Objective("square", "min"),
+    )
+    result = solve(problem)
+    assert result.status == "limit_violated"
+    assert result.parameters["x"] == pytest.approx(3.0, abs=1e-12)
+    assert not result.limits["x"]["active"]
+
+
 def saddle_product(v):
     return {"xy": v["x"] * v["y"], "sum": v["x"] + v["y"]}
 
