@@ -17,6 +17,7 @@ Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax; see
 import argparse
 import importlib.metadata
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -107,7 +108,7 @@ def run_solve(args):
     first = solve_problem(problem)
     result = solve_problem(problem)
     if args.json:
-        print(json.dumps({**result.to_json(), "first_call_seconds": first.seconds}))
+        print(json_text({**result.to_json(), "first_call_seconds": first.seconds}))
     else:
         print(result.table())
         print(f"first call: {first.seconds:.3g} s (tracing and compiling included)")
@@ -120,16 +121,32 @@ def run_simulate(args):
     spec = load_spec(args.spec)
     scene = scene_from_spec(spec)
     result = simulate(scene, loads_from_spec(spec), key=jax.random.key(0))
-    print(json.dumps(simulation_json(result)) if args.json else simulation_table(result))
+    print(json_text(simulation_json(result)) if args.json else simulation_table(result))
     return 0 if bool(result.converged.all()) else EXIT_NOT_SOLVED
 
 
 def run_accuracy(args):
     rows = accuracy.measure(progress=None if args.json else sys.stderr)
-    print(json.dumps([row._asdict() for row in rows]) if args.json else accuracy.table(rows))
+    print(json_text([row._asdict() for row in rows]) if args.json else accuracy.table(rows))
     if args.plot:
         accuracy.plot(rows, args.plot)
     return 0
+
+
+def json_text(value) -> str:
+    """``value`` as strict JSON: a non-finite number (which json.dumps would write as the
+    bare, invalid NaN or Infinity) becomes null."""
+
+    def finite(item):
+        if isinstance(item, float):
+            return item if math.isfinite(item) else None
+        if isinstance(item, dict):
+            return {key: finite(entry) for key, entry in item.items()}
+        if isinstance(item, (list, tuple)):
+            return [finite(entry) for entry in item]
+        return item
+
+    return json.dumps(finite(value), allow_nan=False)
 
 
 def check_plot_path(path):

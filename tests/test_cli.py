@@ -176,3 +176,26 @@ def test_a_plot_path_that_cannot_be_written_is_refused_before_the_solve(tmp_path
     captured = capsys.readouterr()
     assert captured.out == "" and "--plot" in captured.err and len(captured.err.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
+
+
+def test_json_output_is_strict_json():
+    """A non-finite number is written as null, never as the bare NaN / Infinity that
+    json.dumps writes by default (which JSON readers refuse)."""
+    from magdesign.cli import json_text
+
+    text = json_text({"a": float("nan"), "b": [1.5, float("inf"), {"c": -float("inf")}], "d": "x"})
+    assert json.loads(text, parse_constant=lambda name: pytest.fail(f"bare {name}")) == {
+        "a": None, "b": [1.5, None, {"c": None}], "d": "x"}
+
+
+@pytest.mark.parametrize("normal", ['["0 N", "0 N"]', '["0 N", "-5 N"]'])
+def test_a_design_without_a_press_is_a_bad_spec(tmp_path, capsys, normal):
+    """A zero or negative load range gave exit 3 and an infinite sensitivity: it is a bad
+    spec naming load.normal."""
+    text = (EXAMPLES / "dome_hall.toml").read_text()
+    assert 'normal = ["0 N", "5 N"]' in text
+    path = tmp_path / "no_press.toml"
+    path.write_text(text.replace('normal = ["0 N", "5 N"]', f"normal = {normal}"))
+    assert main(["solve", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "load.normal" in err

@@ -105,6 +105,11 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
     """
     scene = scene_from_spec(spec, fidelity=fidelity)
     design = _table(spec, "design", required=True)
+    # A magnet-scene design is for the largest press of its load sweep: without one, its
+    # compliance travel, closest approach and sensitivity (per newton) mean nothing.
+    if hasattr(scene, "max_force") and not float(scene.max_force) > 0.0:
+        raise SpecError("load.normal: a design needs a largest normal load above 0 N (the press it is designed "
+                        f"for); the sweep's largest is {float(scene.max_force):g} N")
     _check_keys("design", design, ("variables", "targets", "limits", "objective", "report"))
     known_parameters = parameters(scene)
     output_units = scene.output_units
