@@ -71,24 +71,28 @@ def build_parser():
         "mechanics not converged). Specs are TOML; see examples/ and the README.",
     )
     parser.add_argument("--version", action="version", version=f"magdesign {importlib.metadata.version('magdesign')}")
+    debug = argparse.ArgumentParser(add_help=False)
+    # Before or after the command; SUPPRESS keeps a command's default from hiding the first.
+    debug.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show the traceback of an internal error")
     parser.add_argument("--debug", action="store_true", help="show the traceback of an internal error")
     sub = parser.add_subparsers(dest="command", required=True)
+    add_parser = lambda name, **kwargs: sub.add_parser(name, parents=[debug], **kwargs)  # noqa: E731
 
-    solve = sub.add_parser("solve", help="solve a design spec (default: the seed-001 dome with a Hall sensor)")
+    solve = add_parser("solve", help="solve a design spec (default: the seed-001 dome with a Hall sensor)")
     solve.add_argument("spec", nargs="?", help="design spec (TOML); the built-in default design if omitted")
     solve.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     solve.add_argument("--fidelity", help="mechanics fidelity level, overriding the spec (e.g. reissner, axisymmetric)")
     solve.add_argument("--plot", metavar="FILE", help="write a PNG of the targets and limits around the design")
 
-    simulate_cmd = sub.add_parser("simulate", help="run a scene's forward chain over its load sweep")
+    simulate_cmd = add_parser("simulate", help="run a scene's forward chain over its load sweep")
     simulate_cmd.add_argument("spec", help="scene or design spec (TOML); a design spec simulates its start point")
     simulate_cmd.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
 
-    accuracy_cmd = sub.add_parser("accuracy", help="measure every model's error against its time, on this machine")
+    accuracy_cmd = add_parser("accuracy", help="measure every model's error against its time, on this machine")
     accuracy_cmd.add_argument("--json", action="store_true", help="print a JSON list of rows instead of the table")
     accuracy_cmd.add_argument("--plot", metavar="FILE", help="write a PNG of error against time (log-log)")
 
-    show = sub.add_parser("show", help="draw the sensor in its axial plane with its field, at rest and at the largest load")
+    show = add_parser("show", help="draw the sensor in its axial plane with its field, at rest and at the largest load")
     show.add_argument("spec", help="scene or design spec (TOML); a design spec shows its start point")
     show.add_argument("--plot", metavar="FILE", required=True, help="the PNG to write")
     return parser

@@ -151,8 +151,9 @@ def test_an_internal_error_is_one_line_and_exit_1_and_debug_shows_it(monkeypatch
     assert main(["simulate", "any.toml"]) == 1
     err = capsys.readouterr().err.strip()
     assert err.splitlines() == ["magdesign simulate: internal error: ZeroDivisionError: a bug (run with --debug for the traceback)"]
-    with pytest.raises(ZeroDivisionError):
-        main(["--debug", "simulate", "any.toml"])
+    for argv in (["--debug", "simulate", "any.toml"], ["simulate", "any.toml", "--debug"]):
+        with pytest.raises(ZeroDivisionError):
+            main(argv)
 
 
 def test_version_and_a_closed_pipe():
