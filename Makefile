@@ -11,7 +11,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/magdesign solve
+	$(VENV)/bin/magdesign solve --timing
 
 test: $(STAMP)
 	$(PY) -m pytest -q -n 2

@@ -200,3 +200,17 @@ def test_a_design_without_a_press_is_a_bad_spec(tmp_path, capsys, normal):
     assert main(["solve", str(path)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "load.normal" in err
+
+
+def test_solve_runs_once_unless_timing_is_asked(monkeypatch, capsys):
+    """A slow (axisymmetric) solve was run twice to report a warm time; now only with --timing."""
+    import magdesign.cli as cli
+
+    calls = []
+    real = cli.solve_problem
+    monkeypatch.setattr(cli, "solve_problem", lambda problem: calls.append(1) or real(problem))
+    assert main(["solve"]) == 0 and len(calls) == 1
+    assert "first call" in capsys.readouterr().out
+    assert main(["solve", "--timing", "--json"]) == 0 and len(calls) == 3
+    result = json.loads(capsys.readouterr().out)
+    assert result["first_call_seconds"] > 0 and result["seconds"] > 0
