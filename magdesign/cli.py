@@ -64,17 +64,17 @@ def use_compilation_cache():
 
 
 def build_parser():
+    debug = argparse.ArgumentParser(add_help=False)
+    # Taken before or after the command; SUPPRESS keeps a command's default from hiding the first.
+    debug.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show the traceback of an internal error")
     parser = argparse.ArgumentParser(
         prog="magdesign",
+        parents=[debug],
         description="Design magnetic tactile sensors by differentiable optimisation.",
         epilog="Exit codes: 0 done, 1 internal error, 2 bad spec or arguments, 3 not solved (or "
         "mechanics not converged). Specs are TOML; see examples/ and the README.",
     )
     parser.add_argument("--version", action="version", version=f"magdesign {importlib.metadata.version('magdesign')}")
-    debug = argparse.ArgumentParser(add_help=False)
-    # Before or after the command; SUPPRESS keeps a command's default from hiding the first.
-    debug.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show the traceback of an internal error")
-    parser.add_argument("--debug", action="store_true", help="show the traceback of an internal error")
     sub = parser.add_subparsers(dest="command", required=True)
     add_parser = lambda name, **kwargs: sub.add_parser(name, parents=[debug], **kwargs)  # noqa: E731
 
@@ -163,7 +163,7 @@ def check_plot_path(path):
     solve, so that a long run does not end in an error): a name ending in .png in an
     existing, writable folder, and not a folder itself."""
     target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
+    folder = target.parent
     if target.is_dir():
         raise SpecError(f"--plot {path}: a folder; give the path of the .png file to write")
     if target.suffix.lower() != ".png":
@@ -176,15 +176,11 @@ def check_plot_path(path):
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
-    if getattr(args, "plot", None):
-        try:
-            check_plot_path(args.plot)
-        except SpecError as error:
-            print(f"magdesign {args.command}: {error}", file=sys.stderr)
-            return EXIT_BAD_SPEC
     use_compilation_cache()
     command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy, "show": run_show}[args.command]
     try:
+        if getattr(args, "plot", None):
+            check_plot_path(args.plot)
         return command(args)
     except (SpecError, ValueError) as error:
         print(f"magdesign {args.command}: {error}", file=sys.stderr)
@@ -195,7 +191,7 @@ def main(argv=None):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except Exception as error:
-        if args.debug:
+        if getattr(args, "debug", False):
             raise
         first_line = (str(error).splitlines() or [""])[0][:200]
         print(f"magdesign {args.command}: internal error: {type(error).__name__}: {first_line} "
