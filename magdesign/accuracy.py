@@ -132,7 +132,7 @@ def measure_area_averaging():
     size = jnp.array([200 * um, 95 * um])
 
     def averaged(points_per_side):
-        offsets, weights = AreaAveraging(size=size, points=points_per_side).nodes(rotations)
+        offsets, weights = AreaAveraging(size=size, points=points_per_side).sampling(rotations)
         return jax.jit(lambda c: jnp.einsum("sqi,q->si", cylinder(c[:, None, :] + offsets, **SEED002_MAGNET), weights))
 
     reference = averaged(AREA_REFERENCE_POINTS)(centres)

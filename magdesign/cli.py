@@ -20,6 +20,7 @@ import json
 import math
 import os
 import sys
+import warnings
 from pathlib import Path
 
 import jax
@@ -27,8 +28,10 @@ import jax
 from magdesign import accuracy
 from magdesign.design import solve as solve_problem
 from magdesign.design.plot import plot_design
-from magdesign.design.spec import default_spec, load_spec, problem_from_spec
-from magdesign.scene import loads_from_spec, scene_from_spec, simulate, simulation_json, simulation_table
+from magdesign.design.report import format_quantity
+from magdesign.design.spec import default_spec, exact_levels, fidelity_levels, load_spec, problem_from_spec
+from magdesign.scene import (loads_from_spec, outputs, scene_from_spec, simulate, simulation_json, simulation_table,
+                             with_parameters)
 from magdesign.scene.picture import plot_scene
 from magdesign.units import SpecError
 
@@ -81,12 +84,16 @@ def build_parser():
     solve = add_parser("solve", help="solve a design spec (default: the seed-001 dome with a Hall sensor)")
     solve.add_argument("spec", nargs="?", help="design spec (TOML); the built-in default design if omitted")
     solve.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
-    solve.add_argument("--fidelity", help="mechanics fidelity level, overriding the spec (e.g. reissner, axisymmetric)")
+    solve.add_argument("--fidelity", default="auto",
+                       help="auto (default): solve at the spec's levels, then confirm from that answer with the "
+                       "exact dome (axisymmetric) and field (exact) models, and report both; or one mechanics "
+                       "level for every solve (e.g. reissner, axisymmetric)")
     solve.add_argument("--plot", metavar="FILE", help="write a PNG of the targets and limits around the design")
-    solve.add_argument("--timing", action="store_true", help="solve a second time and report that warm time too")
+    solve.add_argument("--timing", action="store_true", help="solve the answer's problem again and report that warm time too")
 
     simulate_cmd = add_parser("simulate", help="run a scene's forward chain over its load sweep")
-    simulate_cmd.add_argument("spec", help="scene or design spec (TOML); a design spec simulates its start point")
+    simulate_cmd.add_argument("spec", help="scene or design spec (TOML); a design spec simulates its start point "
+                              "(every [design.variables] entry at its start), then lists the design outputs")
     simulate_cmd.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
 
     accuracy_cmd = add_parser("accuracy", help="measure every model's error against its time, on this machine")
@@ -108,29 +115,90 @@ def run_show(args):
 
 def run_solve(args):
     spec = load_spec(args.spec) if args.spec else default_spec()
-    problem, _ = problem_from_spec(spec, fidelity=args.fidelity)
-    # The first solve traces and compiles; with --timing a second one measures the warm
-    # time a design costs (not by default: at the axisymmetric level it doubles the wait).
+    auto = args.fidelity in (None, "auto")
+    problem, _ = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
+    levels = fidelity_levels(spec if auto else {**spec, "mechanics": {**spec.get("mechanics", {}), "fidelity": args.fidelity}})
+    _progress(args, f"solving at {levels}")
     first = solve_problem(problem)
-    result = solve_problem(problem) if args.timing else first
+    answers = [(levels, problem, first)]
+    exact = exact_levels(spec) if auto else None
+    if exact is not None:
+        # Confirm at the exact levels, from the cheap answer: a few steps of the costly model.
+        exact_problem, _ = problem_from_spec(exact)
+        confirming = fidelity_levels(exact)
+        _progress(args, f"confirming at {confirming}, from that answer")
+        confirmed = solve_problem(exact_problem, start=first.parameters)
+        answers.append((confirming, exact_problem, confirmed))
+    levels, problem, result = answers[-1]
+    warm = solve_problem(problem, start=answers[-2][2].parameters if exact else None) if args.timing else None
     if args.json:
-        print(json_text({**result.to_json(), "first_call_seconds": first.seconds}))
+        document = {**result.to_json(), "fidelity": levels, "objective": _objective(problem, result)}
+        if exact is not None:
+            cheap = answers[0]
+            document["first_level"] = {**cheap[2].to_json(), "fidelity": cheap[0]}
+        if warm is not None:
+            document["warm_seconds"] = warm.seconds
+        print(json_text(document))
     else:
-        print(result.table())
-        if args.timing:
-            print(f"first call: {first.seconds:.3g} s (tracing and compiling included); the time above is a warm solve")
-        else:
-            print("the time above is the first call (tracing and compiling included); --timing adds a warm solve")
+        for index, (name, _, answer) in enumerate(answers):
+            role = "the answer" if index == len(answers) - 1 else "first answer, confirmed below"
+            print(f"{name} ({role}):")
+            print(answer.table())
+            print(f"   that solve took {answer.seconds:.3g} s (first call: tracing and compiling included)\n")
+        if exact is not None:
+            print(_difference(answers[0][2], result, answers[0][0], levels))
+        if warm is not None:
+            print(f"warm solve at {levels}: {warm.seconds * 1e3:.3g} ms")
     if args.plot:
         plot_design(problem, result, args.plot)
     return 0 if result.status == "successful" else EXIT_NOT_SOLVED
 
 
+def _progress(args, message):
+    """A line on stderr before a solve (not with --json, whose reader wants one object)."""
+    if not args.json:
+        print(f"magdesign solve: {message} ...", file=sys.stderr, flush=True)
+
+
+def _objective(problem, result):
+    if problem.objective is None:
+        return None
+    name = problem.objective.output
+    return {"output": name, "sense": problem.objective.sense, "value": result.outputs[name]}
+
+
+def _difference(cheap, exact, cheap_levels, exact_levels_name):
+    """How far the cheap answer is from the exact one, parameter by parameter."""
+    lines = [f"the first answer ({cheap_levels}) against the answer ({exact_levels_name}):"]
+    for name, value in exact.parameters.items():
+        unit = exact.units.get(name)
+        lines.append(f"  {name:<24} {format_quantity(cheap.parameters[name], unit):<16} -> {format_quantity(value, unit):<16} "
+                     f"(difference {format_quantity(value - cheap.parameters[name], unit)})")
+    return "\n".join(lines)
+
+
 def run_simulate(args):
     spec = load_spec(args.spec)
-    scene = scene_from_spec(spec)
-    result = simulate(scene, loads_from_spec(spec), key=jax.random.key(0))
-    print(json_text(simulation_json(result)) if args.json else simulation_table(result))
+    scene, loads = scene_from_spec(spec), loads_from_spec(spec)
+    start = {}
+    if "design" in spec:
+        # a design spec simulates its start point: the scene with every variable at its start
+        problem, scene = problem_from_spec(spec)
+        start = {v.name: float(v.start) for v in problem.variables}
+        scene = with_parameters(scene, start)
+    result = simulate(scene, loads, key=jax.random.key(0))
+    values = {name: float(value) for name, value in outputs(scene, loads).items()}
+    if args.json:
+        print(json_text({**simulation_json(result), "start": start, "outputs": values,
+                         "output_units": scene.output_units}))
+    else:
+        if start:
+            shown = ", ".join(f"{name} = {value:.6g}" for name, value in start.items())
+            print(f"a design spec: simulating its start point ({shown}, SI)")
+        print(simulation_table(result))
+        print("outputs (docs/outputs.md): " + ", ".join(
+            f"{name} = {value:.6g} {scene.output_units.get(name, '1').removeprefix('1')}".rstrip()
+            for name, value in values.items()))
     return 0 if bool(result.converged.all()) else EXIT_NOT_SOLVED
 
 
@@ -174,15 +242,21 @@ def check_plot_path(path):
         raise SpecError(f"--plot {path}: cannot write there")
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """A warning as one line on stderr ("magdesign: warning: ..."), without a source line."""
+    print(f"magdesign: warning: {message}", file=sys.stderr if file is None else file)
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
     use_compilation_cache()
+    warnings.showwarning = _show_warning
     command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy, "show": run_show}[args.command]
     try:
         if getattr(args, "plot", None):
             check_plot_path(args.plot)
         return command(args)
-    except (SpecError, ValueError) as error:
+    except SpecError as error:
         print(f"magdesign {args.command}: {error}", file=sys.stderr)
         return EXIT_BAD_SPEC
     except BrokenPipeError:

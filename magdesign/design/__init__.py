@@ -11,5 +11,3 @@ from magdesign.design.report import DesignSweep as DesignSweep
 from magdesign.design.solve import multistart as multistart
 from magdesign.design.solve import solve as solve
 from magdesign.design.solve import sweep as sweep
-from magdesign.design.defaults import DomeHallModel as DomeHallModel
-from magdesign.design.defaults import default_problem as default_problem

@@ -32,7 +32,8 @@ def _keys(problem):
     ]
 
 
-def _shown(value, unit):
+def format_quantity(value: float, unit: str | None) -> str:
+    """An SI value shown in ``unit`` ("5.8458 mm"), or bare when ``unit`` is None."""
     return f"{convert(value, unit):.6g} {unit}" if unit else f"{value:.6g}"
 
 
@@ -131,7 +132,8 @@ class DesignResult(eqx.Module):
         return self.status == "successful"
 
     def to_json(self) -> dict:
-        """The JSON object of DESIGN.md section 3, plus limits, active bounds, derivatives."""
+        """The JSON object of DESIGN.md section 3, plus limits, active bounds, derivatives,
+        every output the problem names (SI) and the units the table shows them in."""
         return {
             "status": self.status,
             "parameters": dict(self.parameters),
@@ -142,6 +144,8 @@ class DesignResult(eqx.Module):
             "active_bounds": dict(self.active_bounds),
             "violated": list(self.violated),
             "derivatives": {k: dict(v) for k, v in self.derivatives.items()},
+            "outputs": dict(self.outputs),
+            "units": {name: unit for name, unit in self.units.items() if unit is not None},
         }
 
     def table(self) -> str:
@@ -154,24 +158,24 @@ class DesignResult(eqx.Module):
         lines = [row("parameter", "value")]
         for name, value in self.parameters.items():
             bound = f"(on {self.active_bounds[name]} bound)" if name in self.active_bounds else ""
-            lines.append(row(name, _shown(value, unit(name)), bound))
+            lines.append(row(name, format_quantity(value, unit(name)), bound))
         if self.targets:
             lines.append(row("target", "wanted", "achieved", "met"))
             for name, t in self.targets.items():
                 met = "no" if name in self.violated else "yes"
-                lines.append(row(name, _shown(t["target"], unit(name)), _shown(t["achieved"], unit(name)), met))
+                lines.append(row(name, format_quantity(t["target"], unit(name)), format_quantity(t["achieved"], unit(name)), met))
         if self.limits:
             lines.append(row("limit", "bound", "achieved", "active"))
             for name, lim in self.limits.items():
                 bounds = " ".join(
-                    f"{'<=' if side == 'upper' else '>='} {_shown(lim[side], unit(name))}"
+                    f"{'<=' if side == 'upper' else '>='} {format_quantity(lim[side], unit(name))}"
                     for side in ("upper", "lower")
                     if side in lim
                 )
-                lines.append(row(name, bounds, _shown(lim["achieved"], unit(name)), "yes" if lim["active"] else "no"))
+                lines.append(row(name, bounds, format_quantity(lim["achieved"], unit(name)), "yes" if lim["active"] else "no"))
         if others:
             lines.append(row("output", "value"))
-            lines.extend(row(name, _shown(self.outputs[name], unit(name))) for name in others)
+            lines.extend(row(name, format_quantity(self.outputs[name], unit(name))) for name in others)
         violated = f" (not met: {', '.join(self.violated)})" if self.violated else ""
         lines.append(f"status: {self.status}{violated}   steps: {self.steps}   time: {self.seconds * 1e3:.3g} ms")
         return "\n".join(lines)

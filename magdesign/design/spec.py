@@ -16,6 +16,8 @@ limit's value takes the unit of its output (the scene's ``output_units``). Every
 a one-line :class:`~magdesign.units.SpecError` naming the key.
 """
 
+import contextlib
+import copy
 import importlib.resources
 import tomllib
 from collections.abc import Mapping
@@ -25,11 +27,16 @@ import jax
 from jaxtyping import Array
 
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable
-from magdesign.scene import MECHANICS_CONVERGED, AbstractScene, outputs, parameters, scene_from_spec, with_parameters
+from magdesign.scene import (MECHANICS_CONVERGED, AbstractScene, Loads, MagnetScene, loads_from_spec, outputs,
+                             parameters, scene_from_spec, with_parameters)
+from magdesign.scene._spec import PARAMETER_UNITS, check_domain
+from magdesign.scene.build import check_wall
+from magdesign.scene.mechanics import Dome
 from magdesign.units import SpecError, parse, written_unit
 
 _VARIABLE_KEYS = ("lower", "upper", "start", "scale")
-_LIMIT_KEYS = ("lower", "upper")
+_LIMIT_KEYS = ("lower", "upper", "scale")
+_TARGET_KEYS = ("value", "scale")
 _SENSES = {"maximize": "max", "minimize": "min"}
 
 
@@ -41,10 +48,12 @@ class SceneModel(eqx.Module):
     """
 
     scene: AbstractScene
+    loads: Loads
 
     def __call__(self, values: Mapping[str, Array]) -> dict[str, Array]:
-        """{parameter: value (SI)} -> {output: scalar (SI)} (see :func:`magdesign.scene.outputs`)."""
-        return outputs(with_parameters(self.scene, values))
+        """{parameter: value (SI)} -> {output: scalar (SI)}: the outputs of the scene's
+        simulation over the spec's load sweep (:func:`magdesign.scene.outputs`)."""
+        return outputs(with_parameters(self.scene, values), self.loads)
 
 
 def default_spec() -> dict:
@@ -68,6 +77,15 @@ def load_spec(path) -> dict:
         raise SpecError(f"{path}: arrays or tables nested too deep to read") from None
 
 
+@contextlib.contextmanager
+def _named(where):
+    """Turn a ValueError of the problem's own checks into a SpecError naming ``where``."""
+    try:
+        yield
+    except ValueError as error:
+        raise SpecError(f"{where}: {error}") from None
+
+
 def _table(spec, key, *, required):
     value = spec.get(key)
     if value is None and not required:
@@ -86,10 +104,66 @@ def _check_keys(where, entry, allowed):
 
 
 def _parameter_unit(spec, name):
-    """The unit the scene spec writes parameter ``name`` in ("mm"), or "1" for a plain number."""
+    """(SI unit of parameter ``name``, the unit to show it in): the unit the scene spec writes
+    the parameter in ("mm"), else its SI unit; "1" for a dimensionless one."""
     table, _, key = name.rpartition(".")
     value = spec.get(table, {}).get(key) if table else spec.get(key)
-    return written_unit(value) or "1"
+    si = PARAMETER_UNITS.get(name, "1")
+    return si, written_unit(value) or si
+
+
+def _si_unit(output_units, name):
+    unit = output_units.get(name, "1")
+    return None if unit == "1" else unit
+
+
+def _check_dome_wall(scene, variables):
+    """SpecError unless some dome within the variables' bounds has a wall thinner than its radius."""
+    mechanics = getattr(scene, "mechanics", None)
+    if not isinstance(mechanics, Dome):
+        return
+    bounds = {v.name: v for v in variables}
+    thinnest = float(bounds["mechanics.thickness"].lower) if "mechanics.thickness" in bounds else float(mechanics.thickness)
+    largest = (float(bounds["mechanics.outer_radius"].upper) if "mechanics.outer_radius" in bounds
+               else float(mechanics.outer_radius))
+    key = "design.variables.mechanics.thickness.lower" if "mechanics.thickness" in bounds else "mechanics.thickness"
+    check_wall(thinnest, largest, key=key)
+
+
+# Models with cheaper levels: (table, key, model) -> (name in a report, the spec's default
+# level, {cheap level: the exact level that confirms it}). A cylinder's "axis" level is exact
+# where a scene may use it (every sensor on the axis), so only "dipole" needs confirming.
+_LEVELS = {
+    ("mechanics", "model", "dome"): ("dome", "reissner", {"reissner": "axisymmetric"}),
+    ("mechanics", "model", "layer"): ("layer", "hooke", {}),
+    ("magnet", "shape", "cylinder"): ("field", "exact", {"dipole": "exact"}),
+}
+
+
+def _leveled(spec):
+    """(table, report name, level now, most exact level) of each such model in the spec."""
+    for (table, key, model), (name, default, exact) in _LEVELS.items():
+        entry = spec.get(table)
+        if isinstance(entry, dict) and entry.get(key) == model:
+            level = entry.get("fidelity", default)
+            yield table, name, level, exact.get(level, level)
+
+
+def fidelity_levels(spec: dict) -> str:
+    """The levels a spec's models run at, for a report ("dome reissner, field axis")."""
+    return ", ".join(f"{name} {level}" for _, name, level, _ in _leveled(spec))
+
+
+def exact_levels(spec: dict) -> dict | None:
+    """The spec with its dome and cylinder field at their exact levels (axisymmetric dome,
+    exact field for a dipole), or None when it runs at them already."""
+    changes = {table: exact for table, _, level, exact in _leveled(spec) if level != exact}
+    if not changes:
+        return None
+    exact = copy.deepcopy(spec)
+    for table, level in changes.items():
+        exact[table]["fidelity"] = level
+    return exact
 
 
 def problem_from_spec(spec: dict, *, fidelity: str | None = None):
@@ -104,16 +178,19 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         outputs, and the scene at its spec values.
     """
     scene = scene_from_spec(spec, fidelity=fidelity)
+    loads = loads_from_spec(spec)
     design = _table(spec, "design", required=True)
-    # A magnet-scene design is for the largest press of its load sweep: without one, its
-    # compliance travel, closest approach and sensitivity (per newton) mean nothing.
-    if hasattr(scene, "max_force") and not float(scene.max_force) > 0.0:
-        raise SpecError("load.normal: a design needs a largest normal load above 0 N (the press it is designed "
-                        f"for); the sweep's largest is {float(scene.max_force):g} N")
+    # A magnet-scene design is for the largest press of its load sweep, from its first point:
+    # without a press, its compliance, closest approach and sensitivity (per newton) mean nothing.
+    if isinstance(scene, MagnetScene):
+        press = float(loads.max_normal - loads.normal[0])
+        if not press > 0.0:
+            raise SpecError("load.normal: a design needs a sweep that presses harder than its first point (the "
+                            f"press it is designed for); its largest normal load is {press:g} N above its first")
     _check_keys("design", design, ("variables", "targets", "limits", "objective", "report"))
     known_parameters = parameters(scene)
     output_units = scene.output_units
-    known_outputs = set(jax.eval_shape(outputs, scene))
+    known_outputs = set(jax.eval_shape(outputs, scene, loads))
 
     def output_name(where, name):
         if name not in known_outputs:
@@ -126,22 +203,38 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         if name not in known_parameters:
             raise SpecError(f"{where}: unknown parameter; expected one of {', '.join(sorted(known_parameters))}")
         _check_keys(where, entry, _VARIABLE_KEYS)
-        unit = _parameter_unit(spec, name)
+        unit, shown = _parameter_unit(spec, name)
+        shown = written_unit(entry.get("lower")) or shown if shown == unit else shown
         values = {key: parse(entry[key], unit, key=f"{where}.{key}") for key in _VARIABLE_KEYS if key in entry}
         for key in ("lower", "upper"):
             if key not in values:
-                raise SpecError(f"{where}.{key}: missing bound; expected a quantity in {unit}")
-        try:
-            variables.append(Variable(name, unit=None if unit == "1" else unit, **values))
-        except ValueError as error:
-            raise SpecError(f"{where}: {error}") from None
+                raise SpecError(f"{where}.{key}: missing bound; expected a quantity in {shown}")
+        for key, value in values.items():
+            if key != "scale":
+                check_domain(name, value, key=f"{where}.{key}")
+        with _named(where):
+            variables.append(Variable(name, unit=None if shown == "1" else shown, **values))
+
+    _check_dome_wall(scene, variables)
 
     targets = []
     for name, value in _table(design, "targets", required=False).items():
         where = f"design.targets.{name}"
         output_name(where, name)
-        value_si = parse(value, output_units.get(name, "1"), key=where)
-        targets.append(Target(name, value_si, unit=written_unit(value)))
+        unit = output_units.get(name, "1")
+        if isinstance(value, dict):  # { value = "0 mT", scale = "1 mT" }: a zero target needs a scale
+            _check_keys(where, value, _TARGET_KEYS)
+            if "value" not in value:
+                raise SpecError(f"{where}.value: missing; expected a quantity in {unit}")
+            entry = value
+        else:
+            entry = {"value": value}
+        numbers = {key: parse(entry[key], unit, key=f"{where}.{key}") for key in entry}
+        if numbers["value"] == 0.0 and "scale" not in numbers:
+            raise SpecError(f"{where}: a target of 0 needs a scale to judge 'met' by; write it as "
+                            f"{{ value = {entry['value']!r}, scale = \"...\" }} with a quantity in {unit}")
+        with _named(where):
+            targets.append(Target(name, numbers["value"], scale=numbers.get("scale"), unit=written_unit(entry["value"])))
 
     limits = []
     for name, entry in _table(design, "limits", required=False).items():
@@ -152,7 +245,11 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
             raise SpecError(f"{where}: expected an upper and/or a lower bound")
         unit = output_units.get(name, "1")
         bounds = {key: parse(entry[key], unit, key=f"{where}.{key}") for key in entry}
-        limits.append(Limit(name, **bounds, unit=written_unit(next(iter(entry.values())))))
+        if not set(bounds) - {"scale"}:
+            raise SpecError(f"{where}: expected an upper and/or a lower bound")
+        written = written_unit(entry.get("upper", entry.get("lower")))
+        with _named(where):
+            limits.append(Limit(name, **bounds, unit=written))
 
     objective = None
     objective_table = _table(design, "objective", required=False)
@@ -172,13 +269,21 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         output_name(f"design.report.{name}", name)
         if unit is not None:
             parse(f"1 {unit}", output_units.get(name, "1"), key=f"design.report.{name}")
+    # every reported output carries a unit: the spec's, else its SI unit
+    report = {name: unit or _si_unit(output_units, name) for name, unit in report.items()}
+    if objective is not None and objective.output not in report:
+        report[objective.output] = _si_unit(output_units, objective.output)
 
     if not targets and not limits and objective is None:
         raise SpecError("design: expected at least one of [design.targets], [design.limits], [design.objective]")
 
+    if isinstance(scene, MagnetScene) and "closest_gap" not in [lim.output for lim in limits]:
+        # The geometry is a limit every design meets or reports: the magnet never reaches the
+        # sensor plane (a load that drives it through gives limit_violated, not a negative gap).
+        limits.append(Limit("closest_gap", lower=0.0, scale=float(scene.height), unit="mm"))
     converged = MECHANICS_CONVERGED if MECHANICS_CONVERGED in known_outputs else None
     problem = Problem(
-        SceneModel(scene), variables, targets=targets, limits=limits, objective=objective, report=report,
+        SceneModel(scene, loads), variables, targets=targets, limits=limits, objective=objective, report=report,
         converged=converged,
     )
     return problem, scene

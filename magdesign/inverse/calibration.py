@@ -77,7 +77,7 @@ def _calibrate(scene, names, loads, readings, noise, max_steps):
 
     def model(y):
         fitted = with_parameters(scene, {name: start[name] * y[i] for i, name in enumerate(names)})
-        return chain(fitted, fitted.displacement(loads)[0], time=loads.time, without=("noise",))[2]
+        return chain(fitted, fitted.displacement(loads)[0], time=loads.time, without=("noise",)).readings
 
     flat_model = difference_jacobian(lambda y: model(y).ravel(), FD_CALIBRATION_STEP)
 

@@ -91,7 +91,7 @@ def forward_readings(scene: AbstractScene, displacement: Float[ArrayLike, "*batc
     """The static deterministic readings (..., S, C) of the scene at displacements (..., 3) (m)."""
     displacement = jnp.asarray(displacement, dtype=float)
     flat = displacement.reshape(-1, 3)
-    readings = chain(scene, flat, without=NOT_INVERTED)[2]
+    readings = chain(scene, flat, without=NOT_INVERTED).readings
     return readings.reshape(displacement.shape[:-1] + readings.shape[1:])
 
 

@@ -4,9 +4,73 @@ Every error is a :class:`~magdesign.units.SpecError` with a one-line message tha
 names the dotted key and what was expected.
 """
 
+import re
+import warnings
+
 from magdesign.units import SpecError, parse
 
 _MISSING = object()
+
+# The physical domain of each scene number, by dotted spec key: (lowest, lowest allowed?,
+# highest, highest allowed?); None: no bound that side. Checked where the number is read
+# (and on a design variable's bounds), so that the traced chain carries no checks.
+_POSITIVE = (0.0, False, None, False)
+_NONNEGATIVE = (0.0, True, None, False)
+DOMAINS = {
+    **dict.fromkeys(
+        ["magnet.radius", "magnet.height", "magnet.remanence", "magnet.period", "magnet.thickness",
+         "magnet.magnetization", "mechanics.outer_radius", "mechanics.thickness", "mechanics.contact_area",
+         "mechanics.c10", "mechanics.youngs_modulus", "mechanics.shear_modulus", "mechanics.bulk_modulus",
+         "mechanics.spring", "geometry.gap", "pole.ball_radius", "pole.diameter", "inductors.area",
+         "inductors.turns", "sensor.amplification", "inductors.amplification", "scene.area",
+         "scene.lag_time_constant", "scene.saturation_limit", "scene.lsb"],
+        _POSITIVE,
+    ),
+    **dict.fromkeys(["mechanics.c01", "sensor.pitch", "scene.noise", "sensor.height"], _NONNEGATIVE),
+    "mechanics.poisson_ratio": (-1.0, False, 0.5, False),
+    "pole.demagnetizing_factor": (0.0, False, 1.0, True),
+}
+# The SI unit of each scene parameter a design can set free (a variable's bounds are read in it).
+PARAMETER_UNITS = {
+    **dict.fromkeys(["geometry.gap", "magnet.radius", "magnet.height", "magnet.period", "magnet.thickness",
+                     "mechanics.outer_radius", "mechanics.thickness", "sensor.pitch", "pole.ball_radius",
+                     "pole.diameter", "sensor.offset", "sensor.height"], "m"),
+    **dict.fromkeys(["magnet.remanence", "magnet.magnetization"], "T"),
+    **dict.fromkeys(["mechanics.c10", "mechanics.c01", "mechanics.youngs_modulus", "mechanics.shear_modulus",
+                     "mechanics.bulk_modulus"], "Pa"),
+    "mechanics.contact_area": "m^2",
+    "mechanics.spring": "N/rad",
+}
+# Values far outside real parts: allowed, with a warning. (key: (highest plausible, unit, why))
+PLAUSIBLE = {
+    "magnet.remanence": (1.6, "T", "the strongest permanent magnets (NdFeB) reach about 1.5 T"),
+    "magnet.magnetization": (1.6, "T", "the strongest permanent magnets (NdFeB) reach about 1.5 T"),
+}
+
+
+class PlausibilityWarning(UserWarning):
+    """A spec value that is allowed but far outside real parts."""
+
+
+def check_domain(name: str, value: float, *, key: str | None = None, unit: str = "") -> None:
+    """SpecError naming ``key`` (default ``name``) unless ``value`` lies in the physical
+    domain of the scene number ``name`` (:data:`DOMAINS`); a PlausibilityWarning when it
+    is far outside real parts (:data:`PLAUSIBLE`)."""
+    key = key or name
+    name = re.sub(r"\.extra\[\d+\]", "", name)  # a further magnet's numbers are a magnet's
+    if name in DOMAINS:
+        low, low_ok, high, high_ok = DOMAINS[name]
+        below = low is not None and (value < low or (value == low and not low_ok))
+        above = high is not None and (value > high or (value == high and not high_ok))
+        if below or above:
+            left = "(-inf" if low is None else ("[" if low_ok else "(") + f"{low:g}"
+            right = "inf)" if high is None else f"{high:g}" + ("]" if high_ok else ")")
+            raise SpecError(f"{key}: {value:g} {unit or '(SI)'} is not physical; expected a value in {left}, {right}")
+    if name in PLAUSIBLE:
+        highest, plausible_unit, why = PLAUSIBLE[name]
+        if abs(value) > highest:
+            warnings.warn(f"{key}: {value:g} {plausible_unit} is far outside real parts ({why})",
+                          PlausibilityWarning, stacklevel=2)
 
 
 class Table:
@@ -43,7 +107,9 @@ class Table:
         value = self._get(key, default)
         if value is default and default is not _MISSING:
             return default
-        return parse(value, unit, key=f"{self.name}.{key}")
+        value = parse(value, unit, key=f"{self.name}.{key}")
+        check_domain(f"{self.name}.{key}", value, unit=unit)
+        return value
 
     def quantities(self, key, unit, length=None, default=_MISSING):
         """A list of SI floats (e.g. a position ["1 mm", "0 mm", "2 mm"])."""
@@ -53,7 +119,10 @@ class Table:
         if not isinstance(value, list) or (length is not None and len(value) != length):
             count = f"{length} " if length is not None else ""
             raise SpecError(f"{self.name}.{key}: expected a list of {count}quantities in {unit}, got {value!r}")
-        return [parse(item, unit, key=f"{self.name}.{key}") for item in value]
+        values = [parse(item, unit, key=f"{self.name}.{key}") for item in value]
+        for item in values:
+            check_domain(f"{self.name}.{key}", item, unit=unit)
+        return values
 
     def choice(self, key, options, default=_MISSING):
         """One of ``options`` (strings)."""

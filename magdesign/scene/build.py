@@ -56,11 +56,19 @@ def _material(table):
     return LinearElastic(E=jnp.asarray(table.quantity("youngs_modulus", "Pa")), nu=jnp.asarray(table.quantity("poisson_ratio", "1")))
 
 
+def check_wall(thickness, outer_radius, key="mechanics.thickness"):
+    """SpecError naming ``key`` unless a dome's wall (m) is thinner than its outer radius (m)."""
+    if not thickness < outer_radius:
+        raise SpecError(f"{key}: a {thickness * 1e3:g} mm wall does not fit in a dome of outer radius "
+                        f"{outer_radius * 1e3:g} mm; expected a wall thinner than the radius")
+
+
 def _mechanics(spec, fidelity, models=("dome", "layer")):
     table = Table(spec, "mechanics")
     model = table.choice("model", models)
     if model == "dome":
         levels = DOME_FIDELITIES
+        check_wall(table.quantity("thickness", "m"), table.quantity("outer_radius", "m"))
         mechanics = Dome(
             outer_radius=jnp.asarray(table.quantity("outer_radius", "m")),
             thickness=jnp.asarray(table.quantity("thickness", "m")),
@@ -126,6 +134,8 @@ def _effects(spec, reading_unit, *, saturation, lsb, noise):
     for name in names:
         if name not in fx.EFFECT_NAMES:
             raise SpecError(f"scene.effects: unknown effect {name!r}; expected any of: {', '.join(fx.EFFECT_NAMES)}")
+        if names.count(name) > 1:
+            raise SpecError(f"scene.effects: {name!r} listed twice")
 
     def scalar(key, unit, default):
         return jnp.asarray(table.quantity(key, unit, default=default))
@@ -157,20 +167,14 @@ def _effects(spec, reading_unit, *, saturation, lsb, noise):
     return chosen
 
 
-def _max_loads(spec):
-    loads = loads_from_spec(spec)
-    return jnp.max(loads.normal), jnp.max(jnp.abs(loads.shear))
-
-
 def _hall(table):
     preset = table.choice("preset", tuple(HALL_PRESETS))
     return HALL_PRESETS[preset]()
 
 
 def _hall_effects(spec, hall):
-    # per-axis range and LSB: the scene's effects use the largest (x, y, z may differ)
-    return _effects(spec, "T", saturation=float(jnp.min(hall.full_scale)), lsb=float(jnp.max(hall.lsb)),
-                    noise=float(jnp.max(hall.lsb)))
+    # per axis (x, y, z may differ: the MLX90393's z range and LSB are its x, y ones x 1.6)
+    return _effects(spec, "T", saturation=hall.full_scale, lsb=hall.lsb, noise=hall.lsb)
 
 
 def _optional_vector(table, key, unit):
@@ -249,6 +253,10 @@ def _cylinder_scene(spec, fidelity):
         effects = _effects(spec, "V", saturation=ADC_FULL_SCALE, lsb=ADC_FULL_SCALE / 2 ** (ADC_BITS - 1), noise=ADC_NOISE)
     if field_fidelity == "axis" and np.any(np.asarray(positions)[:, :2] != 0.0):
         raise SpecError("magnet.fidelity: 'axis' needs every sensor on the magnet's axis (x = y = 0)")
+    off_axis = [effect.name for effect in effects if effect.name in ("placement", "area_averaging")]
+    if field_fidelity == "axis" and off_axis:
+        raise SpecError(f"magnet.fidelity: 'axis' holds on the magnet's axis only, and the {off_axis[0]} effect "
+                        "reads the field off it; use 'exact'")
     geometry = Table(spec, "geometry")
     gap = geometry.quantity("gap", "m")
     geometry.done()
@@ -275,7 +283,6 @@ def _cylinder_scene(spec, fidelity):
         sensor_positions=positions,
         sensor_angles=angles,
         transducer=transducer,
-        max_force=_max_loads(spec)[0],
         effects=effects,
         inductors=inductors,
         fidelity=field_fidelity,
@@ -306,7 +313,6 @@ def _film_scene(spec, fidelity):
         magnetization=jnp.asarray(magnetization),
         layer=layer,
         pitch=jnp.asarray(pitch),
-        max_shear=_max_loads(spec)[1],
         hall=hall,
         effects=_hall_effects(spec, hall),
         grid=grid,
@@ -366,5 +372,6 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
     :class:`~magdesign.units.SpecError` (one line, naming the key) on bad input.
     """
     check_tables(spec, TABLES)
+    loads_from_spec(spec)  # a bad [load] table is a bad spec, whatever runs next
     shape = Table(spec, "magnet").choice("shape", tuple(_SCENES))
     return _SCENES[shape](spec, fidelity)

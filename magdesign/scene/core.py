@@ -10,7 +10,7 @@ with the scene's effects (:mod:`magdesign.scene.effects`) hooked in at their sta
 
 import abc
 from collections.abc import Callable, Mapping
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 import equinox as eqx
 import jax
@@ -18,7 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float, PRNGKeyArray
 
-from magdesign.scene.effects import AbstractEffect, AreaAveraging
+from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.loads import Loads
 from magdesign.scene.pose import to_chip
 from magdesign.units import SpecError
@@ -71,8 +71,9 @@ class AbstractScene(eqx.Module):
         """Ideal readings (``reading_unit``) from the field in each chip's frame (T)."""
 
     @abc.abstractmethod
-    def outputs(self) -> dict[str, Float[Array, ""]]:
-        """Named scalar outputs (SI) for design targets; see each scene."""
+    def outputs(self, result: "SimulationResult") -> dict[str, Float[Array, ""]]:
+        """Named scalar outputs (SI) for design targets, read from a simulation of the
+        scene (:func:`outputs`); see each scene."""
 
     def probe_points(self) -> Float[Array, "e 3"] | None:
         """Points (E, 3) (m) besides the sensors whose field :meth:`extras` needs (e.g.
@@ -95,6 +96,8 @@ class SimulationResult(eqx.Module):
         displacement: (n, 3) source displacement relative to the sensors (m).
         field: (n, S, 3) flux density at each sensor in the scene frame, with the
             field effects applied (T).
+        chip_field: (n, S, 3) the same in each chip's own frame (a, b, c) (T): what the
+            transducer reads before its own non-idealities.
         readings: (n, S, C) transducer readings with all effects (reading unit).
         extras: further named arrays (scene-specific).
         converged: (n,) whether the mechanics' solve converged at each load point; where
@@ -106,6 +109,7 @@ class SimulationResult(eqx.Module):
     converged: Bool[Array, " n"]
     displacement: Float[Array, "n 3"]
     field: Float[Array, "n s 3"]
+    chip_field: Float[Array, "n s 3"]
     readings: Float[Array, "n s c"]
     extras: dict[str, Array]
     labels: tuple[str, ...] = eqx.field(static=True)
@@ -135,11 +139,6 @@ def with_parameters(scene: AbstractScene, values: Mapping[str, ArrayLike]) -> Ab
     return eqx.tree_at(lambda s: [get(s) for get in getters], scene, replacements)
 
 
-def outputs(scene: AbstractScene) -> dict[str, Float[Array, ""]]:
-    """The scene's named scalar outputs (SI); traceable and differentiable."""
-    return scene.outputs()
-
-
 def _apply_source_effects(scene, effects):
     for effect in effects:
         scale = effect.source_scale()
@@ -149,6 +148,23 @@ def _apply_source_effects(scene, effects):
     return scene
 
 
+class Chain(NamedTuple):
+    """One pass of the forward chain (see :func:`chain`); n load points, S sensors."""
+
+    displacement: Float[Array, "n 3"]  # after the motion effects (m)
+    field: Float[Array, "n s 3"]  # at the sensors, scene frame, with the field effects (T)
+    chip_field: Float[Array, "n s 3"]  # the same in each chip's frame (a, b, c) (T)
+    readings: Float[Array, "n s c"]  # with the reading effects (reading unit)
+    probe_field: Float[Array, "n e 3"] | None  # at the probe points, no field effects (T)
+
+
+# Effects that are random: a design leaves them out.
+RANDOM_EFFECTS = ("noise",)
+# Left out for the static, deterministic chain at a single load (a derivative at rest, an
+# inversion): the random effects and the lag, which needs a time series.
+STATIC_WITHOUT = ("noise", "viscoelastic_lag")
+
+
 def chain(
     scene: AbstractScene,
     displacement: Float[Array, "n 3"],
@@ -156,10 +172,8 @@ def chain(
     time: Float[Array, " n"] | None = None,
     key: PRNGKeyArray | None = None,
     without: tuple[str, ...] = (),
-) -> tuple[Float[Array, "n 3"], Float[Array, "n s 3"], Float[Array, "n s c"], Float[Array, "n e 3"] | None]:
-    """The chain from the source's displacement (n, 3) (m) on: (displacement after the
-    motion effects, field (n, S, 3) (T, scene frame), readings (n, S, C), field at the
-    scene's probe points (n, E, 3) (T) or None).
+) -> Chain:
+    """The chain from the source's displacement (n, 3) (m) on (:class:`Chain`).
 
     Effects named in ``without`` are left out (the inverse leaves out "noise" and
     "viscoelastic_lag" to get the deterministic, static forward model).
@@ -173,40 +187,53 @@ def chain(
     for effect in effects:
         displacement = effect.motion(displacement, time)
 
-    probes = scene.probe_points()
+    # Each sensor reads the field at its centre, or averaged over a sampling effect's nodes.
     sensors = positions.shape[0]
-    averaging = [effect for effect in effects if isinstance(effect, AreaAveraging)]
-    if averaging:
-        offsets, weights = averaging[0].nodes(rotations)
-        nodes = positions[:, None, :] + offsets
-        if probes is not None:
-            nodes = jnp.concatenate([nodes, jnp.broadcast_to(probes[:, None, :], probes.shape[:1] + nodes.shape[1:])])
-        field = jax.vmap(lambda u: jnp.einsum("q,sqi->si", weights, scene.source_field(nodes, u)))(displacement)
-    else:
-        points = positions if probes is None else jnp.concatenate([positions, probes])
-        field = jax.vmap(lambda u: scene.source_field(points, u))(displacement)
-    field, probe_field = field[:, :sensors], (None if probes is None else field[:, sensors:])
+    samplings = [sampling for effect in effects if (sampling := effect.sampling(rotations)) is not None]
+    points = positions if not samplings else (positions[:, None, :] + samplings[0][0]).reshape(-1, 3)
+    count = points.shape[0]
+    probes = scene.probe_points()
+    if probes is not None:
+        points = jnp.concatenate([points, probes])
+    raw = jax.vmap(lambda u: scene.source_field(points, u))(displacement)
+    field, probe_field = raw[:, :count], (None if probes is None else raw[:, count:])
+    if samplings:
+        weights = samplings[0][1]
+        field = jnp.einsum("q,nsqi->nsi", weights, field.reshape(-1, sensors, weights.shape[0], 3))
     for effect in effects:
         field = effect.field(field)
 
-    readings = scene.transduce(to_chip(rotations, field))
+    chip_field = to_chip(rotations, field)
+    readings = scene.transduce(chip_field)
     for effect in effects:
         readings = effect.reading(readings, key)
-    return displacement, field, readings, probe_field
+    return Chain(displacement, field, chip_field, readings, probe_field)
 
 
 @eqx.filter_jit
-def simulate(scene: AbstractScene, loads: Loads, *, key: PRNGKeyArray | None = None) -> SimulationResult:
+def simulate(
+    scene: AbstractScene, loads: Loads, *, key: PRNGKeyArray | None = None, without: tuple[str, ...] = ()
+) -> SimulationResult:
     """Run the scene's forward chain over ``loads``, with exactly the scene's effects (jitted).
 
-    ``key`` (a JAX PRNG key) is needed only when the scene lists ``noise``.
+    ``key`` (a JAX PRNG key) is needed only when the scene lists ``noise``; effects named in
+    ``without`` are left out.
     """
     displacement, converged = scene.displacement(loads)
-    displacement, field, readings, probe_field = chain(scene, displacement, time=loads.time, key=key)
-    extras = scene.extras(displacement, loads, probe_field)
+    passed = chain(scene, displacement, time=loads.time, key=key, without=without)
+    extras = scene.extras(passed.displacement, loads, passed.probe_field)
     return SimulationResult(
-        loads, converged, displacement, field, readings, extras, scene.reading_labels, scene.reading_unit
+        loads, converged, passed.displacement, passed.field, passed.chip_field, passed.readings, extras,
+        scene.reading_labels, scene.reading_unit,
     )
+
+
+def outputs(scene: AbstractScene, loads: Loads) -> dict[str, Float[Array, ""]]:
+    """The scene's named scalar outputs (SI) over the load sweep ``loads``: what
+    :meth:`AbstractScene.outputs` reads from :func:`simulate` of that sweep (its random
+    effects left out; no output reads the readings after the reading effects, so that
+    noise, clipping and rounding change none). Traceable and differentiable."""
+    return scene.outputs(simulate(scene, loads, without=RANDOM_EFFECTS))
 
 
 def _si_to_display(unit):

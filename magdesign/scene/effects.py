@@ -10,7 +10,7 @@ chain's order, and effects sharing a hook in the order of :data:`EFFECT_ORDER`:
     3. chip_tilt          sensors    chip rotation Rx Ry Rz (seed 002 Eq. 3) composed
                                      with the chip's nominal orientation
     4. viscoelastic_lag   motion     first-order lag of the displacement time series
-    5. area_averaging     field      field averaged over the active area, n x n
+    5. area_averaging     sampling   field averaged over the active area, n x n
                                      Gauss-Legendre nodes in the chip plane
     6. background         field      a uniform field (e.g. the Earth's 50 uT) added
     7. saturation         reading    clip to the transducer's range
@@ -24,10 +24,9 @@ signal. Parameters of effects are pytree leaves (differentiable); the list is st
 from typing import ClassVar
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, ArrayLike, Float, PRNGKeyArray
+from jaxtyping import Array, Float, PRNGKeyArray
 
 from magdesign.mechanics import lag_filter
 from magdesign.scene.pose import rotation
@@ -50,6 +49,11 @@ class AbstractEffect(eqx.Module):
     def motion(self, displacement: Float[Array, "n 3"], time: Float[Array, " n"]) -> Float[Array, "n 3"]:
         """The source's displacement time series (m), adjusted."""
         return displacement
+
+    def sampling(self, rotations: Float[Array, "s 3 3"]) -> tuple[Float[Array, "s q 3"], Float[Array, " q"]] | None:
+        """Where each sensor samples the field, if not at its centre alone: offsets (S, Q, 3)
+        (m, scene frame) from each centre and weights (Q,) summing to 1; or None."""
+        return None
 
     def field(self, field: Float[Array, "n s 3"]) -> Float[Array, "n s 3"]:
         """The flux density at the sensors in the scene frame (T), adjusted."""
@@ -116,14 +120,12 @@ class AreaAveraging(AbstractEffect):
     size: Float[Array, "2"]
     points: int = eqx.field(static=True, default=3)
 
-    def nodes(self, rotations: Float[Array, "s 3 3"]) -> tuple[Float[Array, "s q 3"], Float[Array, " q"]]:
-        """Offsets (S, Q, 3) (m) of the nodes from each sensor centre, and weights (Q,) summing to 1."""
+    def sampling(self, rotations):
         x, w = np.polynomial.legendre.leggauss(self.points)
         u, v = np.meshgrid(x, x, indexing="ij")
         local = jnp.stack([u.ravel() * self.size[0] / 2, v.ravel() * self.size[1] / 2, np.zeros(u.size)], axis=-1)
-        weights = jnp.asarray(np.outer(w, w).ravel() / 4.0)
         # chip frame -> scene frame: the transpose of the chip rotation
-        return jnp.einsum("sji,qj->sqi", rotations, local), weights
+        return jnp.einsum("sji,qj->sqi", rotations, local), jnp.asarray(np.outer(w, w).ravel() / 4.0)
 
 
 class Background(AbstractEffect):
@@ -137,7 +139,8 @@ class Background(AbstractEffect):
 
 
 class Saturation(AbstractEffect):
-    """Clip each reading to +-``limit`` (the transducer's range, in reading units)."""
+    """Clip each reading to +-``limit`` (the transducer's range, in reading units): a
+    scalar, or one limit per reading channel (C,) (a Hall sensor's x, y, z ranges)."""
 
     name: ClassVar[str] = "saturation"
     limit: Float[Array, ""]
@@ -147,7 +150,8 @@ class Saturation(AbstractEffect):
 
 
 class Noise(AbstractEffect):
-    """Gaussian noise of standard deviation ``sigma`` (reading units); needs a key."""
+    """Gaussian noise of standard deviation ``sigma`` (reading units; scalar or per
+    channel (C,)); needs a key."""
 
     name: ClassVar[str] = "noise"
     sigma: Float[Array, ""]
@@ -159,13 +163,47 @@ class Noise(AbstractEffect):
 
 
 class Quantisation(AbstractEffect):
-    """Round each reading to a multiple of ``lsb`` (reading units)."""
+    """Round each reading to a multiple of ``lsb`` (reading units; scalar or per channel (C,))."""
 
     name: ClassVar[str] = "quantisation"
     lsb: Float[Array, ""]
 
     def reading(self, reading, key):
         return quantise(reading, self.lsb)
+
+
+# Outputs the reading effects give a design (:func:`effect_outputs`), with their SI units.
+EFFECT_OUTPUT_UNITS = {"saturation": {"saturation_ratio": "1"}, "quantisation": {"resolution": "N"},
+                       "noise": {"noise_equivalent_force": "N"}}
+
+
+def effect_output_units(effects) -> dict[str, str]:
+    """The outputs :func:`effect_outputs` gives for these effects, with their SI units."""
+    return {name: unit for effect in effects for name, unit in EFFECT_OUTPUT_UNITS.get(effect.name, {}).items()}
+
+
+def effect_outputs(
+    effects, ideal: Float[Array, "n s c"], sensitivity: Float[Array, ""]
+) -> dict[str, Float[Array, ""]]:
+    """What the listed reading effects mean for a design, from the ideal readings (n, S, C)
+    (before the reading effects) and the reading sensitivity (reading unit per N) of the
+    channel a design reads (sensor 0's last channel: a Hall chip's c axis, a valve's V):
+
+        saturation_ratio        max over n, S, C of |ideal| / limit (-); > 1: the clip acts
+        resolution              lsb / |sensitivity|: the force of one LSB (N)
+        noise_equivalent_force  sigma / |sensitivity|: the force of one sigma (N)
+
+    A per-channel limit, lsb or sigma (C,) is taken per channel (the last for the force
+    outputs)."""
+    values = {}
+    for effect in effects:
+        if isinstance(effect, Saturation):
+            values["saturation_ratio"] = jnp.max(jnp.abs(ideal) / effect.limit)
+        elif isinstance(effect, Quantisation):
+            values["resolution"] = jnp.ravel(effect.lsb)[-1] / jnp.abs(sensitivity)
+        elif isinstance(effect, Noise):
+            values["noise_equivalent_force"] = jnp.ravel(effect.sigma)[-1] / jnp.abs(sensitivity)
+    return values
 
 
 EFFECT_ORDER = (TemperatureDrift, Placement, ChipTilt, ViscoelasticLag, AreaAveraging, Background,

@@ -19,11 +19,13 @@ taxels), shear (Fx, Fy) by F / k_s, with the layer stiffness k_n, k_s of
 :func:`magdesign.mechanics.layer_stiffness` for the contact area S. The film is
 uniform along y, so only the x shear changes the field.
 
-Outputs (:meth:`FilmScene.outputs`), at the grid's centre (the origin):
-    field_fraction      |B| at the taxel plane over |B| at the film's face (-);
-                        e^{-k h} for the infinite film
+Outputs (:meth:`FilmScene.outputs`), at the central taxel (the middle of the grid; one
+of the middle four of an even grid), through the scene's chain with its field effects
+(see docs/outputs.md):
+    field_fraction      |B| at the taxel at rest (zero load) over |B| of the film alone at
+                        its face (-); e^{-k h} for the infinite film
     normal_sensitivity  d|B| / dFz there at rest (T/N); k |B| / k_n for the infinite film
-    shear_phase_max     k times the largest shear displacement of the sweep (rad)
+    shear_phase_max     k times the largest |u_x| of the sweep (rad)
     normal_compliance   1 / k_n (m/N);  shear_compliance  1 / k_s (m/N)
 """
 
@@ -35,8 +37,9 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from magdesign.fields import film
-from magdesign.scene.core import AbstractScene
+from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect
+from magdesign.scene.loads import Loads
 from magdesign.scene.mechanics import Layer
 from magdesign.transducers import Hall3D
 
@@ -61,7 +64,6 @@ class FilmScene(AbstractScene):
     magnetization: Float[Array, ""]
     layer: Layer
     pitch: Float[Array, ""]
-    max_shear: Float[Array, ""]
     hall: Hall3D
     effects: tuple[AbstractEffect, ...]
     grid: tuple[int, int] = eqx.field(static=True)
@@ -114,21 +116,23 @@ class FilmScene(AbstractScene):
     def transduce(self, field):
         return field
 
-    def outputs(self):
+    def outputs(self, result):
         k = 2.0 * jnp.pi / self.period
         stiffness = self.layer.stiffness
-        centre = jnp.zeros(3)
+        rows, cols = self.grid
+        centre = (rows // 2) * cols + cols // 2
 
-        def magnitude(normal_travel):
-            """|B| at the grid's centre with the film moved down by ``normal_travel`` (m)."""
-            return jnp.linalg.norm(self.source_field(centre, jnp.array([0.0, 0.0, -1.0]) * normal_travel))
+        def magnitude(force):
+            """|B| (T) at the central taxel under a static normal ``force`` (N)."""
+            displacement = self.displacement(Loads(force[None]))[0]
+            return jnp.linalg.norm(chain(self, displacement, without=STATIC_WITHOUT).field[0, centre])
 
-        at_taxels, slope = jax.jvp(magnitude, (jnp.zeros(()),), (jnp.ones(()),))
-        at_face = magnitude(self.layer.thickness)
+        at_taxel, slope = jax.jvp(magnitude, (jnp.zeros(()),), (jnp.ones(()),))
+        at_face = jnp.linalg.norm(self.source_field(jnp.array([0.0, 0.0, 1.0]) * self.layer.thickness, jnp.zeros(3)))
         return {
-            "field_fraction": at_taxels / at_face,
-            "normal_sensitivity": slope / stiffness.normal,
-            "shear_phase_max": k * self.max_shear / stiffness.shear,
+            "field_fraction": at_taxel / at_face,
+            "normal_sensitivity": slope,
+            "shear_phase_max": k * jnp.max(jnp.abs(result.displacement[:, 0])),
             "normal_compliance": 1.0 / stiffness.normal,
             "shear_compliance": 1.0 / stiffness.shear,
         }

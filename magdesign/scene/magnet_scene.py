@@ -13,35 +13,38 @@ Sensors sit at given positions (a reference sensor at the origin for seed 001; a
 the magnet by -z towards them (seed 002's chips move towards a fixed magnet: the
 same relative displacement).
 
-Outputs (:meth:`MagnetScene.outputs`), at the sweep's largest normal force F:
-    compliance         secant compliance at F (m/N)
-    closest_gap        gap - compliance F (m)
-    field_rest         Bz at sensor 0 at zero load (T)
-    field_closest      Bz at sensor 0 at F (T)
-    sensitivity        (field_closest - field_rest) / F (T/N)
-    inplane_field_max  largest |B_a| (the chip's sensitive in-plane axis) over the
-                       sensors and over OUTPUT_POINTS loads from 0 to F (T)
+Outputs (:meth:`MagnetScene.outputs`), read from a simulation of the load sweep (see
+docs/outputs.md): "rest" is the sweep's first point, "closest" its largest normal force
+F, dF the force between them; fields are in each chip's frame (a, b, c) after the
+scene's field effects, before its reading effects.
+    compliance         (uz(rest) - uz(closest)) / dF (m/N)
+    closest_gap        gap + the lowest uz of the sweep (m)
+    field_rest         B_c at sensor 0 at rest (T)
+    field_closest      B_c at sensor 0 at closest (T)
+    sensitivity        (field_closest - field_rest) / dF (T/N)
+    field_max          largest |B| component over every sensor, axis and load point (T)
+    inplane_field_max  largest |B_a| (the chip's sensitive in-plane axis) over every
+                       sensor and load point (T)
     inplane_field_min  the smallest (most negative) B_a over the same (T)
     outer_radius       the dome's outer radius (m), for dome scenes only
-    mechanics_converged  1 if the mechanics' solve at F converged, else 0 (-)
+    mechanics_converged  1 if the mechanics converged at every load point, else 0 (-)
+and, when the scene lists the effect (:func:`magdesign.scene.effects.effect_outputs`):
+    saturation_ratio   largest |reading| / saturation limit, per channel (-); above 1 clips
+    resolution         one LSB of sensor 0's last channel over its reading sensitivity (N)
+    noise_equivalent_force  one sigma of that channel over the same (N)
 """
 
 from typing import ClassVar
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from magdesign.scene.core import MECHANICS_CONVERGED, AbstractScene
-from magdesign.scene.effects import AbstractEffect
+from magdesign.scene.effects import AbstractEffect, effect_output_units, effect_outputs
 from magdesign.scene.mechanics import AbstractMechanics
-from magdesign.scene.pose import Magnet, posed_cylinder, rotation, to_chip
+from magdesign.scene.pose import Magnet, posed_cylinder, rotation
 from magdesign.transducers import emf, slip_flags, Hall3D, SpinValve
-
-# Load points from zero to the largest force over which the in-plane outputs are taken.
-OUTPUT_POINTS = 11
-
 
 class SpinValveReadout(eqx.Module):
     """A spin valve's output voltage, optionally amplified as a bridge difference.
@@ -86,7 +89,6 @@ class MagnetScene(AbstractScene):
     sensor_positions: Float[Array, "s 3"]
     sensor_angles: Float[Array, "s 3"]
     transducer: Hall3D | SpinValveReadout
-    max_force: Float[Array, ""]
     effects: tuple[AbstractEffect, ...]
     inductors: Inductors | None = None
     fidelity: str = eqx.field(static=True, default="exact")
@@ -102,6 +104,7 @@ class MagnetScene(AbstractScene):
         "field_rest": "T",
         "field_closest": "T",
         "sensitivity": "T/N",
+        "field_max": "T",
         "inplane_field_max": "T",
         "inplane_field_min": "T",
         MECHANICS_CONVERGED: "1",
@@ -109,7 +112,7 @@ class MagnetScene(AbstractScene):
 
     @property
     def output_units(self):
-        return {**self.OUTPUT_UNITS, **self.mechanics.output_units}
+        return {**self.OUTPUT_UNITS, **self.mechanics.output_units, **effect_output_units(self.effects)}
 
     @property
     def parameter_paths(self):
@@ -162,25 +165,25 @@ class MagnetScene(AbstractScene):
             return field
         return self.transducer(field)[..., None]
 
-    def outputs(self):
-        force = self.max_force
-        compliance, converged = self.mechanics.compliance(force)
-        closest = jnp.array([0.0, 0.0, -1.0]) * compliance * force
-        # one field evaluation over the sweep from rest (first point) to closest (last)
-        sweep = jnp.linspace(0.0, 1.0, OUTPUT_POINTS)[:, None] * closest
-        field = jax.vmap(lambda u: self.source_field(self.sensor_positions, u))(sweep)
-        field_rest, field_closest = field[0, 0, 2], field[-1, 0, 2]
-        inplane = to_chip(rotation(self.sensor_angles), field)[..., 0]
+    def outputs(self, result):
+        loads, field = result.loads, result.chip_field
+        closest = jnp.argmax(loads.normal)
+        force = loads.normal[closest] - loads.normal[0]
+        uz = result.displacement[:, 2]
+        field_rest, field_closest = field[0, 0, 2], field[closest, 0, 2]
+        ideal = self.transduce(field)
         return {
-            "compliance": compliance,
-            "closest_gap": self.gap - compliance * force,
+            "compliance": (uz[0] - uz[closest]) / force,
+            "closest_gap": self.gap + jnp.min(uz),
             "field_rest": field_rest,
             "field_closest": field_closest,
             "sensitivity": (field_closest - field_rest) / force,
-            "inplane_field_max": jnp.max(jnp.abs(inplane)),
-            "inplane_field_min": jnp.min(inplane),
-            MECHANICS_CONVERGED: converged.astype(float),
+            "field_max": jnp.max(jnp.abs(field)),
+            "inplane_field_max": jnp.max(jnp.abs(field[..., 0])),
+            "inplane_field_min": jnp.min(field[..., 0]),
+            MECHANICS_CONVERGED: jnp.all(result.converged).astype(float),
             **self.mechanics.outputs(),
+            **effect_outputs(self.effects, ideal, (ideal[closest, 0, -1] - ideal[0, 0, -1]) / force),
         }
 
     def probe_points(self):

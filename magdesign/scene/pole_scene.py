@@ -27,7 +27,8 @@ it at the tip, and the thesis's FEM has a non-linear B-H curve (its Table 3.1 al
 its units). Treat absolute forces of this level as upper bounds; use it for trends.
 
 Outputs (:meth:`PoleScene.outputs`), at theta = 0:
-    field_sensitivity   dB_x / dtheta at the GMR (T/rad)
+    field_sensitivity   dB_a / dtheta at the GMR (T/rad), through the scene's chain with
+                        its field effects (B_a along the chip's sensitive axis)
     spring_coefficient  the model's own restoring stiffness -dF_t / dtheta, F_t the
                         generalised force along theta of the plate's pull on the
                         rod's charges, per ball radius (N/rad); > 0 is restoring
@@ -41,7 +42,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from magdesign.fields import cylinder
-from magdesign.scene.core import AbstractScene
+from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.magnet_scene import SpinValveReadout
 from magdesign.units import MU0
@@ -149,16 +150,15 @@ class PoleScene(AbstractScene):
         forces = charges[:, None] * self.plate_field(positions) / MU0
         return jnp.sum(forces * velocities) / self.ball_radius
 
-    def outputs(self):
-        sensor = self.sensor_poses()[0][0]
-
-        def bx(theta):
-            return self.source_field(sensor, self.tip(theta) - self.tip(0.0))[0]
+    def outputs(self, result):
+        def field_a(theta):
+            displacement = (self.tip(theta) - self.tip(0.0))[None]
+            return chain(self, displacement, without=STATIC_WITHOUT).chip_field[0, 0, 0]
 
         positions, charges = self.charges(jnp.zeros(3))
         pull = charges[:, None] * self.plate_field(positions) / MU0
         return {
-            "field_sensitivity": jax.grad(bx)(0.0),
+            "field_sensitivity": jax.grad(field_a)(0.0),
             "spring_coefficient": -jax.grad(self._tangential_force)(0.0),
             "attraction": -jnp.sum(pull[:, 2]),
         }

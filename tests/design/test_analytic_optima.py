@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from magdesign.design import Limit, Objective, Problem, Target, Variable, default_problem, multistart, solve, sweep
+from dome_hall_model import default_problem
+from magdesign.design import Limit, Objective, Problem, Target, Variable, multistart, solve, sweep
 from magdesign.fields import cylinder_on_axis, film_magnitude
 from magdesign.mechanics import dome_compliance
 from magdesign.units import mm, mT

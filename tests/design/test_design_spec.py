@@ -33,7 +33,7 @@ def test_default_design_meets_its_closed_form_answer(fidelity, rtol):
     assert float(field) == pytest.approx(4.8e-3, rel=rtol)
     assert result.parameters["geometry.gap"] == pytest.approx(7.4458e-3, abs=1e-7)
     assert result.targets["compliance"]["achieved"] == pytest.approx(0.32e-3, rel=rtol)
-    assert result.limits["field_closest"]["active"]
+    assert result.limits["field_max"]["active"]
 
 
 def _broken(path, value):

@@ -8,7 +8,8 @@ its radius inside its own bounds. Expected values are that closed form, never th
 
 import math
 
-from magdesign.design import Objective, Problem, Target, Variable, default_problem, solve
+from dome_hall_model import default_problem
+from magdesign.design import Objective, Problem, Target, Variable, solve
 from magdesign.mechanics import dome_compliance
 from magdesign.units import mm
 

@@ -26,7 +26,7 @@ def _primitives(names):
     key = jax.random.key(0) if "noise" in names else None
 
     def run(scene):
-        return chain(scene, scene.displacement(LOADS)[0], time=LOADS.time, key=key)[2]
+        return chain(scene, scene.displacement(LOADS)[0], time=LOADS.time, key=key).readings
 
     jaxpr = jax.make_jaxpr(run)(scene)
     return Counter(eqn.primitive.name for eqn in equations(jaxpr)), jaxpr
@@ -74,9 +74,9 @@ def test_effects_are_applied_in_chain_order():
     ideal = dataclasses.replace(_scene([]), effects=())
     ordered = _scene(["quantisation", "background", "saturation"])
     assert [e.name for e in ordered.effects] == ["background", "saturation", "quantisation"]
-    readings = chain(ordered, ordered.displacement(LOADS)[0], time=LOADS.time)[2]
-    ideal_readings = chain(ideal, ideal.displacement(LOADS)[0], time=LOADS.time)[2]
+    readings = chain(ordered, ordered.displacement(LOADS)[0], time=LOADS.time).readings
+    ideal_readings = chain(ideal, ideal.displacement(LOADS)[0], time=LOADS.time).readings
     lsb = ordered.effects[2].lsb
     # background (50 uT on z) then rounding to the LSB: within half an LSB of the truth
-    np.testing.assert_allclose(readings[..., 2], ideal_readings[..., 2] + 50e-6, atol=float(lsb) / 2 + 1e-15)
+    np.testing.assert_allclose(readings[..., 2], ideal_readings[..., 2] + 50e-6, atol=float(lsb[2]) / 2 + 1e-15)
     np.testing.assert_allclose(readings / lsb, np.round(readings / lsb), atol=1e-9)

@@ -7,6 +7,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+import scipy.optimize
 
 from magdesign.design import solve
 from magdesign.design.spec import problem_from_spec
@@ -15,6 +16,8 @@ from magdesign.inverse import film_forces
 from magdesign.scene import Loads, outputs, parameters, scene_from_spec, simulate, with_parameters
 from magdesign.units import SpecError
 from scene_helpers import example
+
+REST = Loads(np.zeros(1))  # one unloaded point
 
 
 @pytest.fixture(scope="module")
@@ -87,25 +90,50 @@ def test_eq3_readout_recovers_forces(ideal):
     np.testing.assert_allclose(fx_hat, fx, rtol=0, atol=1e-12)
 
 
+FRACTION, SENSITIVITY, J0, D, YOUNGS, AREA = 0.02, 1e-3, 85e-3, 0.5e-3, 83e3, 36e-6
+
+
 def test_example_design_reaches_its_closed_form():
-    """examples/film_hall.toml: e^{-kh} = f fixes k h = ln(1/f); then the normal sensitivity
-    k |B|(h) / k_n = J0 (1 - e^{-kd}) f ln(1/f) / (E S) (Hooke layer, k_n = E S / h) fixes T."""
-    problem, _ = problem_from_spec(example("film_hall"))
-    result = solve(problem)
-    fraction, sensitivity, j0, d, youngs, area = 0.02, 1e-3, 85e-3, 0.5e-3, 83e3, 36e-6
-    kd = -np.log(1 - sensitivity * youngs * area / (j0 * fraction * np.log(1 / fraction)))
-    period = 2 * np.pi * d / kd
+    """examples/film_hall.toml without effects: e^{-kh} = f fixes k h = ln(1/f); then the
+    normal sensitivity k |B|(h) / k_n = J0 (1 - e^{-kd}) f ln(1/f) / (E S) (Hooke layer,
+    k_n = E S / h) fixes T."""
+    spec = example("film_hall")
+    spec["scene"] = {"effects": []}
+    result = solve(problem_from_spec(spec)[0])
+    kd = -np.log(1 - SENSITIVITY * YOUNGS * AREA / (J0 * FRACTION * np.log(1 / FRACTION)))
+    period = 2 * np.pi * D / kd
     assert result.status == "successful"
     assert result.parameters["magnet.period"] == pytest.approx(period, rel=1e-9)
-    assert result.parameters["mechanics.thickness"] == pytest.approx(np.log(1 / fraction) * period / (2 * np.pi), rel=1e-9)
+    assert result.parameters["mechanics.thickness"] == pytest.approx(np.log(1 / FRACTION) * period / (2 * np.pi), rel=1e-9)
+
+
+def test_example_design_sees_its_background_field():
+    """examples/film_hall.toml as written, with the Earth's +50 uT (scene z, up) beside the
+    film's downward field at the centre taxel: |B| = A e^{-kh} - b, A = J0 (1 - e^{-kd}), so
+    field_fraction = e^{-kh} - b / A and d|B|/dFz = k A e^{-kh} h / (E S). With q = e^{-kh}
+    = f + b / A: h = ln(1/q) / k and the sensitivity k A q ln(1/q) / (k E S) = A q ln(1/q) /
+    (E S) fixes k (one root, by bisection)."""
+    background = 50e-6
+
+    def sensitivity_error(k):
+        amplitude = J0 * (1 - np.exp(-k * D))
+        q = FRACTION + background / amplitude
+        return amplitude * q * np.log(1 / q) / (YOUNGS * AREA) - SENSITIVITY
+
+    k = scipy.optimize.brentq(sensitivity_error, 2 * np.pi / 12e-3, 2 * np.pi / 3e-3, xtol=1e-14, rtol=1e-15)
+    q = FRACTION + background / (J0 * (1 - np.exp(-k * D)))
+    result = solve(problem_from_spec(example("film_hall"))[0])
+    assert result.status == "successful"
+    assert result.parameters["magnet.period"] == pytest.approx(2 * np.pi / k, rel=1e-9)
+    assert result.parameters["mechanics.thickness"] == pytest.approx(np.log(1 / q) / k, rel=1e-9)
 
 
 def test_outputs_match_closed_forms(ideal):
-    out = outputs(ideal)
+    out = outputs(ideal, REST)
     k, h = 2 * np.pi / 6e-3, 3.5e-3
     assert np.isclose(out["field_fraction"], np.exp(-k * h), rtol=1e-14)
     # seed 004: |B| >= 0.02 |B|max for h <= ln(50) / k
-    at_limit = outputs(with_parameters(ideal, {"mechanics.thickness": np.log(50) / k}))
+    at_limit = outputs(with_parameters(ideal, {"mechanics.thickness": np.log(50) / k}), REST)
     assert np.isclose(at_limit["field_fraction"], 0.02, rtol=1e-12)
     # Hooke layer: k_n = E S / h, k_s = G S / h
     area, youngs, nu = 36e-6, 83e3, 0.49
@@ -118,7 +146,7 @@ def test_parameters_are_traceable_and_differentiable(ideal):
     assert {"magnet.period", "mechanics.thickness", "mechanics.youngs_modulus"} <= set(names)
 
     def fraction(h):
-        return outputs(with_parameters(ideal, {"mechanics.thickness": h}))["field_fraction"]
+        return outputs(with_parameters(ideal, {"mechanics.thickness": h}), REST)["field_fraction"]
 
     k = 2 * np.pi / 6e-3
     grad = jax.jit(jax.grad(fraction))(3.5e-3)

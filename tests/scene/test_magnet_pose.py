@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from magdesign.scene import scene_from_spec, to_magpylib
+from magdesign.scene import Loads, outputs, scene_from_spec, to_magpylib
 from magdesign.units import SpecError
 from scene_helpers import example
 
@@ -76,7 +76,7 @@ def test_posed_magnets_sum_as_magpylibs_collection():
 
 def test_outputs_follow_the_posed_magnets():
     """field_rest is Bz at the sensor (the origin) from all three magnets."""
-    out = jax.jit(lambda s: s.outputs())(scene_from_spec(_posed_spec()))
+    out = jax.jit(outputs)(scene_from_spec(_posed_spec()), Loads(np.array([0.0, 1.0])))
     expected = _hand_built_magnets(np.zeros(3)).getB(np.zeros(3))[2]
     assert float(out["field_rest"]) == pytest.approx(expected, rel=1e-10)
 

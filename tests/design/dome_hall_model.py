@@ -1,4 +1,6 @@
-"""The built-in default design (issue 5; seed 001, PHYSICS.md 2.3) as a plain-model problem.
+"""The built-in default design (seed 001, PHYSICS.md 2.3) written by hand as a plain model:
+a test problem for the solver with closed-form answers, and an independent check of the
+scene chain that the spec (magdesign/design/default.toml, the one definition) runs.
 
 An N35 magnet (3 mm x 1 mm, Br 1.17 T) under a Mooney-Rivlin dome of outer radius 8 mm,
 an AK8963 Hall sensor on its axis. Free: the rest gap between the magnet's top face and
