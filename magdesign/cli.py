@@ -242,6 +242,14 @@ def check_plot_path(path):
         raise SpecError(f"--plot {path}: cannot write there")
 
 
+def _fail(args, code, kind, message):
+    """One line on stderr; with --json also one JSON object on stdout (its reader wants one)."""
+    print(f"magdesign {args.command}: {message}", file=sys.stderr)
+    if getattr(args, "json", False):
+        print(json_text({"error": kind, "message": message, "exit_code": code}))
+    return code
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None):
     """A warning as one line on stderr ("magdesign: warning: ..."), without a source line."""
     print(f"magdesign: warning: {message}", file=sys.stderr if file is None else file)
@@ -257,8 +265,7 @@ def main(argv=None):
             check_plot_path(args.plot)
         return command(args)
     except SpecError as error:
-        print(f"magdesign {args.command}: {error}", file=sys.stderr)
-        return EXIT_BAD_SPEC
+        return _fail(args, EXIT_BAD_SPEC, "bad_spec", str(error))
     except BrokenPipeError:
         # The reader went away (``magdesign simulate ... | head -1``): stop quietly, and keep
         # Python's final flush of stdout from failing again.
@@ -268,9 +275,8 @@ def main(argv=None):
         if getattr(args, "debug", False):
             raise
         first_line = (str(error).splitlines() or [""])[0][:200]
-        print(f"magdesign {args.command}: internal error: {type(error).__name__}: {first_line} "
-              "(run with --debug for the traceback)", file=sys.stderr)
-        return EXIT_INTERNAL
+        return _fail(args, EXIT_INTERNAL, "internal_error",
+                     f"internal error: {type(error).__name__}: {first_line} (run with --debug for the traceback)")
 
 
 if __name__ == "__main__":

@@ -67,7 +67,7 @@ _LARGEST = 1e200
 _ECHO = 80
 
 
-def _shown(value) -> str:
+def echo(value) -> str:
     """repr(value), cut to about _ECHO characters for an error message."""
     try:
         text = repr(value)
@@ -100,7 +100,7 @@ def _parse_unit(text):
     """Parse a unit expression ("mm/N", "kg*m/s^2", "mV/(A/m)") to (factor, dimension)."""
     tokens = _TOKEN.findall(text)
     if "".join(tokens) != re.sub(r"\s+", "", text):
-        raise ValueError(f"cannot read unit {_shown(text)}")
+        raise ValueError(f"cannot read unit {echo(text)}")
     position = 0
 
     def peek():
@@ -115,19 +115,19 @@ def _parse_unit(text):
         token = take()
         if token == "(":
             if depth >= _MAX_UNIT_NESTING:
-                raise ValueError(f"parentheses nested deeper than {_MAX_UNIT_NESTING} in unit {_shown(text)}")
+                raise ValueError(f"parentheses nested deeper than {_MAX_UNIT_NESTING} in unit {echo(text)}")
             value = expression(depth + 1)
             if take() != ")":
-                raise ValueError(f"unbalanced parentheses in unit {_shown(text)}")
+                raise ValueError(f"unbalanced parentheses in unit {echo(text)}")
         elif token is None or token in ")/*^":
-            raise ValueError(f"cannot read unit {_shown(text)}")
+            raise ValueError(f"cannot read unit {echo(text)}")
         else:
             value = _unit_atom(token)
         if peek() == "^":
             take()
             power = take()
             if power is None or not re.fullmatch(r"-?\d+", power) or abs(int(power)) > _MAX_UNIT_POWER:
-                raise ValueError(f"cannot read unit {_shown(text)}: a power is an integer from -{_MAX_UNIT_POWER} to {_MAX_UNIT_POWER}")
+                raise ValueError(f"cannot read unit {echo(text)}: a power is an integer from -{_MAX_UNIT_POWER} to {_MAX_UNIT_POWER}")
             value = _combine((1.0, _DIMENSIONLESS), value, int(power))
         return value
 
@@ -142,7 +142,7 @@ def _parse_unit(text):
 
     result = expression(0)
     if position != len(tokens) or not math.isfinite(result[0]) or result[0] == 0.0:
-        raise ValueError(f"cannot read unit {_shown(text)}")
+        raise ValueError(f"cannot read unit {echo(text)}")
     return result
 
 
@@ -169,23 +169,23 @@ def parse(value, unit, *, key):
     _, expected_dim = _parse_unit(unit)
     example = f"e.g. \"1 {unit}\"" if unit != "1" else "a plain number"
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-        raise SpecError(f"{key}: expected a quantity in {unit} ({example}), got {_shown(value)}")
+        raise SpecError(f"{key}: expected a quantity in {unit} ({example}), got {echo(value)}")
     if isinstance(value, str):
         match = _NUMBER.match(value)
         if match is None:
-            raise SpecError(f"{key}: expected a quantity in {unit} ({example}), got {_shown(value)}")
+            raise SpecError(f"{key}: expected a quantity in {unit} ({example}), got {echo(value)}")
         number, unit_text = float(match.group(1)), match.group(2)
         if unit_text:
             try:
                 factor, dim = _parse_unit(unit_text)
             except ValueError as error:
-                raise SpecError(f"{key}: {error} in {_shown(value)}; expected a quantity in {unit}") from None
+                raise SpecError(f"{key}: {error} in {echo(value)}; expected a quantity in {unit}") from None
             if dim != expected_dim:
-                raise SpecError(f"{key}: wrong unit {_shown(unit_text)} in {_shown(value)}; expected a quantity in {unit}")
+                raise SpecError(f"{key}: wrong unit {echo(unit_text)} in {echo(value)}; expected a quantity in {unit}")
         elif expected_dim == _DIMENSIONLESS:
             factor = 1.0
         else:
-            raise SpecError(f"{key}: missing unit in {_shown(value)}; expected a quantity in {unit} ({example})")
+            raise SpecError(f"{key}: missing unit in {echo(value)}; expected a quantity in {unit} ({example})")
     else:
         number, factor = value, 1.0
     try:
@@ -193,7 +193,7 @@ def parse(value, unit, *, key):
     except OverflowError:
         si = math.inf
     if not math.isfinite(si) or abs(si) > _LARGEST:
-        raise SpecError(f"{key}: {_shown(value)} is not a finite quantity in {unit} of a usable size (below 1e200 in SI)")
+        raise SpecError(f"{key}: {echo(value)} is not a finite quantity in {unit} of a usable size (below 1e200 in SI)")
     return si
 
 

@@ -275,3 +275,15 @@ def test_simulate_of_a_design_spec_says_it_simulates_the_start_point(capsys):
     # the gap in the outputs is the start's, not [geometry]'s 7.4 mm
     assert result["outputs"]["closest_gap"] == pytest.approx(7e-3 + min(u[2] for u in result["displacement"]))
     assert result["output_units"]["compliance"] == "m/N"
+
+
+def test_a_time_series_effect_needs_two_load_points(tmp_path, capsys):
+    text = (EXAMPLES / "gmr_inductor.toml").read_text().replace("points = 21", "points = 1")
+    path = tmp_path / "one_point.toml"
+    path.write_text(text)
+    assert main(["simulate", str(path), "--json"]) == 2
+    captured = capsys.readouterr()
+    assert "load.points" in captured.err and len(captured.err.strip().splitlines()) == 1
+    # with --json the error is also one JSON object on stdout
+    assert json.loads(captured.out) == {"error": "bad_spec", "message": captured.err.strip().split(": ", 1)[1],
+                                        "exit_code": 2}

@@ -29,10 +29,10 @@ from jaxtyping import Array
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable
 from magdesign.scene import (MECHANICS_CONVERGED, AbstractScene, Loads, MagnetScene, loads_from_spec, outputs,
                              parameters, scene_from_spec, with_parameters)
-from magdesign.scene._spec import PARAMETER_UNITS, check_domain
+from magdesign.scene._spec import PARAMETER_UNITS, check_domain, check_keys, sub_table
 from magdesign.scene.build import check_wall
 from magdesign.scene.mechanics import Dome
-from magdesign.units import SpecError, parse, written_unit
+from magdesign.units import SpecError, echo, parse, written_unit
 
 _VARIABLE_KEYS = ("lower", "upper", "start", "scale")
 _LIMIT_KEYS = ("lower", "upper", "scale")
@@ -84,23 +84,6 @@ def _named(where):
         yield
     except ValueError as error:
         raise SpecError(f"{where}: {error}") from None
-
-
-def _table(spec, key, *, required):
-    value = spec.get(key)
-    if value is None and not required:
-        return {}
-    if not isinstance(value, dict):
-        raise SpecError(f"{key}: expected a table")
-    return value
-
-
-def _check_keys(where, entry, allowed):
-    if not isinstance(entry, dict):
-        raise SpecError(f"{where}: expected a table with keys {', '.join(allowed)}, got {entry!r}")
-    unknown = sorted(set(entry) - set(allowed))
-    if unknown:
-        raise SpecError(f"{where}.{unknown[0]}: unknown key; expected one of {', '.join(allowed)}")
 
 
 def _parameter_unit(spec, name):
@@ -179,7 +162,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
     """
     scene = scene_from_spec(spec, fidelity=fidelity)
     loads = loads_from_spec(spec)
-    design = _table(spec, "design", required=True)
+    design = sub_table(spec, "design")
     # A magnet-scene design is for the largest press of its load sweep, from its first point:
     # without a press, its compliance, closest approach and sensitivity (per newton) mean nothing.
     if isinstance(scene, MagnetScene):
@@ -187,7 +170,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         if not press > 0.0:
             raise SpecError("load.normal: a design needs a sweep that presses harder than its first point (the "
                             f"press it is designed for); its largest normal load is {press:g} N above its first")
-    _check_keys("design", design, ("variables", "targets", "limits", "objective", "report"))
+    check_keys("design", design, ("variables", "targets", "limits", "objective", "report"))
     known_parameters = parameters(scene)
     output_units = scene.output_units
     known_outputs = set(jax.eval_shape(outputs, scene, loads))
@@ -198,11 +181,11 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         return name
 
     variables = []
-    for name, entry in _table(design, "variables", required=True).items():
+    for name, entry in sub_table(design, "variables", where="design.variables").items():
         where = f"design.variables.{name}"
         if name not in known_parameters:
             raise SpecError(f"{where}: unknown parameter; expected one of {', '.join(sorted(known_parameters))}")
-        _check_keys(where, entry, _VARIABLE_KEYS)
+        check_keys(where, entry, _VARIABLE_KEYS)
         unit, shown = _parameter_unit(spec, name)
         shown = written_unit(entry.get("lower")) or shown if shown == unit else shown
         values = {key: parse(entry[key], unit, key=f"{where}.{key}") for key in _VARIABLE_KEYS if key in entry}
@@ -218,12 +201,12 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
     _check_dome_wall(scene, variables)
 
     targets = []
-    for name, value in _table(design, "targets", required=False).items():
+    for name, value in sub_table(design, "targets", where="design.targets", required=False).items():
         where = f"design.targets.{name}"
         output_name(where, name)
         unit = output_units.get(name, "1")
         if isinstance(value, dict):  # { value = "0 mT", scale = "1 mT" }: a zero target needs a scale
-            _check_keys(where, value, _TARGET_KEYS)
+            check_keys(where, value, _TARGET_KEYS)
             if "value" not in value:
                 raise SpecError(f"{where}.value: missing; expected a quantity in {unit}")
             entry = value
@@ -237,10 +220,10 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
             targets.append(Target(name, numbers["value"], scale=numbers.get("scale"), unit=written_unit(entry["value"])))
 
     limits = []
-    for name, entry in _table(design, "limits", required=False).items():
+    for name, entry in sub_table(design, "limits", where="design.limits", required=False).items():
         where = f"design.limits.{name}"
         output_name(where, name)
-        _check_keys(where, entry, _LIMIT_KEYS)
+        check_keys(where, entry, _LIMIT_KEYS)
         if not entry:
             raise SpecError(f"{where}: expected an upper and/or a lower bound")
         unit = output_units.get(name, "1")
@@ -252,9 +235,9 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
             limits.append(Limit(name, **bounds, unit=written))
 
     objective = None
-    objective_table = _table(design, "objective", required=False)
+    objective_table = sub_table(design, "objective", where="design.objective", required=False)
     if objective_table:
-        _check_keys("design.objective", objective_table, tuple(_SENSES))
+        check_keys("design.objective", objective_table, tuple(_SENSES))
         if len(objective_table) != 1:
             raise SpecError("design.objective: expected exactly one of maximize = \"output\" or minimize = \"output\"")
         (sense, name), = objective_table.items()
@@ -264,7 +247,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
     if isinstance(report, list):
         report = dict.fromkeys(report)
     if not isinstance(report, dict):
-        raise SpecError(f"design.report: expected output names with display units, e.g. {{ closest_gap = \"mm\" }}, got {report!r}")
+        raise SpecError(f"design.report: expected output names with display units, e.g. {{ closest_gap = \"mm\" }}, got {echo(report)}")
     for name, unit in report.items():
         output_name(f"design.report.{name}", name)
         if unit is not None:
@@ -277,10 +260,14 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
     if not targets and not limits and objective is None:
         raise SpecError("design: expected at least one of [design.targets], [design.limits], [design.objective]")
 
-    if isinstance(scene, MagnetScene) and "closest_gap" not in [lim.output for lim in limits]:
-        # The geometry is a limit every design meets or reports: the magnet never reaches the
-        # sensor plane (a load that drives it through gives limit_violated, not a negative gap).
+    # The geometry is a limit every design meets or reports: the magnet never reaches the sensor
+    # plane, and the dome or layer never travels beyond its own room (a load that drives the
+    # magnet through gives limit_violated, not a negative gap).
+    limited = [lim.output for lim in limits]
+    if isinstance(scene, MagnetScene) and "closest_gap" not in limited:
         limits.append(Limit("closest_gap", lower=0.0, scale=float(scene.height), unit="mm"))
+    if isinstance(scene, MagnetScene) and "travel_fraction" not in limited:
+        limits.append(Limit("travel_fraction", upper=1.0))
     converged = MECHANICS_CONVERGED if MECHANICS_CONVERGED in known_outputs else None
     problem = Problem(
         SceneModel(scene, loads), variables, targets=targets, limits=limits, objective=objective, report=report,

@@ -7,7 +7,7 @@ names the dotted key and what was expected.
 import re
 import warnings
 
-from magdesign.units import SpecError, parse
+from magdesign.units import SpecError, echo, parse
 
 _MISSING = object()
 
@@ -81,15 +81,8 @@ class Table:
     """
 
     def __init__(self, spec, name, *, required=True):
-        value = spec.get(name, _MISSING)
-        if value is _MISSING:
-            if required:
-                raise SpecError(f"[{name}]: missing table; expected a [{name}] table in the spec")
-            value = {}
-        if not isinstance(value, dict):
-            raise SpecError(f"{name}: expected a table, got {value!r}")
         self.name = name
-        self._values = value
+        self._values = sub_table(spec, name, required=required)
         self._known = []
 
     def _get(self, key, default):
@@ -118,7 +111,7 @@ class Table:
             return default
         if not isinstance(value, list) or (length is not None and len(value) != length):
             count = f"{length} " if length is not None else ""
-            raise SpecError(f"{self.name}.{key}: expected a list of {count}quantities in {unit}, got {value!r}")
+            raise SpecError(f"{self.name}.{key}: expected a list of {count}quantities in {unit}, got {echo(value)}")
         values = [parse(item, unit, key=f"{self.name}.{key}") for item in value]
         for item in values:
             check_domain(f"{self.name}.{key}", item, unit=unit)
@@ -128,7 +121,7 @@ class Table:
         """One of ``options`` (strings)."""
         value = self._get(key, default)
         if value not in options:
-            raise SpecError(f"{self.name}.{key}: expected one of {', '.join(map(repr, options))}, got {value!r}")
+            raise SpecError(f"{self.name}.{key}: expected one of {', '.join(map(repr, options))}, got {echo(value)}")
         return value
 
     def integer(self, key, default=_MISSING, minimum=1):
@@ -137,21 +130,42 @@ class Table:
         if value is default and default is not _MISSING:
             return default
         if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-            raise SpecError(f"{self.name}.{key}: expected an integer >= {minimum}, got {value!r}")
+            raise SpecError(f"{self.name}.{key}: expected an integer >= {minimum}, got {echo(value)}")
         return value
 
     def strings(self, key, default=_MISSING):
         value = self._get(key, default)
         if not isinstance(value, list) or not all(isinstance(item, str) for item in value):
-            raise SpecError(f"{self.name}.{key}: expected a list of names, got {value!r}")
+            raise SpecError(f"{self.name}.{key}: expected a list of names, got {echo(value)}")
         return value
 
     def done(self):
         """Reject keys that were never read."""
-        unknown = sorted(set(self._values) - set(self._known))
-        if unknown:
-            valid = ", ".join(sorted(set(self._known)))
-            raise SpecError(f"{self.name}.{unknown[0]}: unknown key; expected one of: {valid}")
+        check_keys(self.name, self._values, sorted(set(self._known)))
+
+
+def sub_table(parent: dict, key: str, *, where: str | None = None, required: bool = True) -> dict:
+    """The table ``parent[key]`` ({} when absent and not ``required``); SpecError naming
+    ``where`` (default ``key``) when it is missing or not a table."""
+    where = where or key
+    value = parent.get(key, _MISSING)
+    if value is _MISSING:
+        if required:
+            raise SpecError(f"[{where}]: missing table; expected a [{where}] table in the spec")
+        return {}
+    if not isinstance(value, dict):
+        raise SpecError(f"{where}: expected a table, got {echo(value)}")
+    return value
+
+
+def check_keys(where: str, entry, allowed) -> None:
+    """SpecError unless ``entry`` is a table whose keys are all in ``allowed``, naming the
+    first unknown key (``where.key``) and the keys allowed."""
+    if not isinstance(entry, dict):
+        raise SpecError(f"{where}: expected a table with keys {', '.join(allowed)}, got {echo(entry)}")
+    unknown = sorted(set(entry) - set(allowed))
+    if unknown:
+        raise SpecError(f"{where}.{unknown[0]}: unknown key; expected one of: {', '.join(allowed)}")
 
 
 def check_tables(spec, allowed):

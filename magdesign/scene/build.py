@@ -25,9 +25,9 @@ from magdesign.scene.loads import loads_from_spec
 from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadout
 from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
-from magdesign.scene.pose import Magnet
+from magdesign.scene.pose import Magnet, grid_positions
 from magdesign.transducers import SpinValve, ak8963, inesc_spin_valve, mlx90393, panasonic_meander
-from magdesign.units import SpecError, parse, uT
+from magdesign.units import SpecError, echo, parse, uT
 
 TABLES = ("scene", "magnet", "mechanics", "sensor", "geometry", "load", "inductors", "pole")
 HALL_PRESETS = {"AK8963": ak8963, "MLX90393": mlx90393}
@@ -95,15 +95,12 @@ def _mechanics(spec, fidelity, models=("dome", "layer")):
 def _sensor_layout(table):
     """Positions (S, 3) (m) and nominal chip angles (S, 3) (rad) from [sensor]."""
     if table.has("grid"):
-        rows, cols = _grid(table)
-        pitch = table.quantity("pitch", "m")
-        x, y = np.meshgrid((np.arange(cols) - (cols - 1) / 2) * pitch, (np.arange(rows) - (rows - 1) / 2) * pitch)
-        depth = table.quantity("depth", "m", default=0.0)
-        positions = np.stack([x.ravel(), y.ravel(), np.full(x.size, -depth)], axis=-1)
+        grid = grid_positions(_grid(table), table.quantity("pitch", "m"))
+        positions = np.asarray(grid) - [0.0, 0.0, table.quantity("depth", "m", default=0.0)]
     elif table.has("positions"):
         raw = table._get("positions", None)
         if not isinstance(raw, list) or not all(isinstance(row, list) and len(row) == 3 for row in raw):
-            raise SpecError(f"sensor.positions: expected a list of [x, y, z] quantities in m, got {raw!r}")
+            raise SpecError(f"sensor.positions: expected a list of [x, y, z] quantities in m, got {echo(raw)}")
         positions = np.array([[parse(value, "m", key="sensor.positions") for value in row] for row in raw])
     else:
         positions = np.zeros((1, 3))
@@ -118,7 +115,7 @@ def _sensor_layout(table):
 def _grid(table):
     value = table._get("grid", [1, 1])
     if not (isinstance(value, list) and len(value) == 2 and all(isinstance(v, int) and v > 0 for v in value)):
-        raise SpecError(f"sensor.grid: expected [rows, columns] (positive integers), got {value!r}")
+        raise SpecError(f"sensor.grid: expected [rows, columns] (positive integers), got {echo(value)}")
     return tuple(value)
 
 
@@ -187,14 +184,14 @@ def _extra_magnets(magnet):
     """[[magnet.extra]]: further cylinders, each at its centre (scene frame) and rotation."""
     raw = magnet._get("extra", [])
     if not isinstance(raw, list) or not all(isinstance(item, dict) for item in raw):
-        raise SpecError(f"magnet.extra: expected [[magnet.extra]] tables, got {raw!r}")
+        raise SpecError(f"magnet.extra: expected [[magnet.extra]] tables, got {echo(raw)}")
     magnets = []
     for index, item in enumerate(raw):
         name = f"magnet.extra[{index}]"
         table = Table({name: item}, name)
         moves = table._get("moves", True)
         if not isinstance(moves, bool):
-            raise SpecError(f"{name}.moves: expected true or false, got {moves!r}")
+            raise SpecError(f"{name}.moves: expected true or false, got {echo(moves)}")
         magnets.append(
             Magnet(
                 radius=jnp.asarray(table.quantity("radius", "m")),
@@ -265,7 +262,7 @@ def _cylinder_scene(spec, fidelity):
         table = Table(spec, "inductors")
         raw = table._get("positions", None)
         if not isinstance(raw, list) or not all(isinstance(row, list) and len(row) == 3 for row in raw):
-            raise SpecError(f"inductors.positions: expected a list of [x, y, z] quantities in m, got {raw!r}")
+            raise SpecError(f"inductors.positions: expected a list of [x, y, z] quantities in m, got {echo(raw)}")
         inductors = Inductors(
             positions=jnp.asarray([[parse(v, "m", key="inductors.positions") for v in row] for row in raw]),
             area=jnp.asarray(table.quantity("area", "m^2")),
@@ -372,6 +369,13 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
     :class:`~magdesign.units.SpecError` (one line, naming the key) on bad input.
     """
     check_tables(spec, TABLES)
-    loads_from_spec(spec)  # a bad [load] table is a bad spec, whatever runs next
+    points = loads_from_spec(spec).normal.shape[0]  # a bad [load] table is a bad spec, whatever runs next
     shape = Table(spec, "magnet").choice("shape", tuple(_SCENES))
-    return _SCENES[shape](spec, fidelity)
+    scene = _SCENES[shape](spec, fidelity)
+    # a time derivative (the inductors' EMF) or a lag needs a time series
+    needs_series = [name for name, wanted in (("the inductors' EMF", getattr(scene, "inductors", None) is not None),
+                                              ("the viscoelastic_lag effect", any(e.name == "viscoelastic_lag" for e in scene.effects)))
+                    if wanted]
+    if needs_series and points < 2:
+        raise SpecError(f"load.points: {needs_series[0]} needs a time series of at least 2 load points, got {points}")
+    return scene

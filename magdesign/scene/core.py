@@ -20,7 +20,7 @@ from jaxtyping import Array, ArrayLike, Bool, Float, PRNGKeyArray
 
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.loads import Loads
-from magdesign.scene.pose import to_chip
+from magdesign.transducers import to_chip
 from magdesign.units import SpecError
 
 # Name of the scene output that is 1 where the mechanics' solve converged and 0 where it

@@ -41,16 +41,8 @@ from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.loads import Loads
 from magdesign.scene.mechanics import Layer
+from magdesign.scene.pose import grid_positions
 from magdesign.transducers import Hall3D
-
-
-def grid_positions(shape: tuple[int, int], pitch) -> Float[Array, "s 3"]:
-    """Centres (S, 3) (m) of a rows x cols grid at ``pitch`` (m) in z = 0, centred on the origin."""
-    rows, cols = shape
-    x = (jnp.arange(cols) - (cols - 1) / 2) * pitch
-    y = (jnp.arange(rows) - (rows - 1) / 2) * pitch
-    xx, yy = jnp.meshgrid(x, y)
-    return jnp.stack([xx.ravel(), yy.ravel(), jnp.zeros(xx.size)], axis=-1)
 
 
 class FilmScene(AbstractScene):

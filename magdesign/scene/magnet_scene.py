@@ -27,6 +27,8 @@ scene's field effects, before its reading effects.
                        sensor and load point (T)
     inplane_field_min  the smallest (most negative) B_a over the same (T)
     outer_radius       the dome's outer radius (m), for dome scenes only
+    travel_fraction    the largest travel towards the sensors over the room the part allows
+                       (a dome's inner height R_o - t, a layer's thickness) (-)
     mechanics_converged  1 if the mechanics converged at every load point, else 0 (-)
 and, when the scene lists the effect (:func:`magdesign.scene.effects.effect_outputs`):
     saturation_ratio   largest |reading| / saturation limit, per channel (-); above 1 clips
@@ -182,7 +184,7 @@ class MagnetScene(AbstractScene):
             "inplane_field_max": jnp.max(jnp.abs(field[..., 0])),
             "inplane_field_min": jnp.min(field[..., 0]),
             MECHANICS_CONVERGED: jnp.all(result.converged).astype(float),
-            **self.mechanics.outputs(),
+            **self.mechanics.outputs(result.displacement),
             **effect_outputs(self.effects, ideal, (ideal[closest, 0, -1] - ideal[0, 0, -1]) / force),
         }
 

@@ -29,7 +29,7 @@ class AbstractMechanics(eqx.Module):
 
     material: eqx.AbstractVar[AbstractMaterial]
     PARAMETERS: ClassVar[dict]
-    output_units: ClassVar[dict[str, str]] = {}
+    output_units: ClassVar[dict[str, str]] = {"travel_fraction": "1"}
 
     @property
     def parameter_paths(self) -> dict:
@@ -48,9 +48,15 @@ class AbstractMechanics(eqx.Module):
         """Secant normal compliance (m/N), normal displacement / ``force`` (N), and whether
         it converged."""
 
-    def outputs(self) -> dict[str, Float[Array, ""]]:
-        """Scalar outputs of the mechanics' own geometry for design objectives (SI)."""
-        return {}
+    @abc.abstractmethod
+    def travel_room(self) -> Float[Array, ""]:
+        """How far (m) the source can move towards the sensors before the part bottoms out."""
+
+    def outputs(self, displacement: Float[Array, "n 3"]) -> dict[str, Float[Array, ""]]:
+        """Scalar outputs (SI) of the mechanics over a sweep's displacements (n, 3) (m):
+        ``travel_fraction``, the largest travel towards the sensors over :meth:`travel_room`
+        (above 1 the part would have to pass through itself)."""
+        return {"travel_fraction": jnp.max(-displacement[:, 2]) / self.travel_room()}
 
 
 class Dome(AbstractMechanics):
@@ -82,10 +88,14 @@ class Dome(AbstractMechanics):
         )
         return compliance, result == mechanics.DomeResult.successful
 
-    output_units: ClassVar = {"outer_radius": "m"}
+    output_units: ClassVar = {**AbstractMechanics.output_units, "outer_radius": "m"}
 
-    def outputs(self):
-        return {"outer_radius": self.outer_radius}
+    def travel_room(self):
+        """The dome's inner height R_o - t: the apex meets the base plane there."""
+        return self.outer_radius - self.thickness
+
+    def outputs(self, displacement):
+        return {**super().outputs(displacement), "outer_radius": self.outer_radius}
 
     def displacement(self, loads):
         compliance, converged = self.compliance(loads.normal)
@@ -113,6 +123,10 @@ class Layer(AbstractMechanics):
 
     def compliance(self, force):
         return 1.0 / self.stiffness.normal, jnp.asarray(True)
+
+    def travel_room(self):
+        """The layer's thickness: pressed to nothing at that travel."""
+        return self.thickness
 
     def displacement(self, loads):
         stiffness = self.stiffness

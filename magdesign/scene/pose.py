@@ -1,13 +1,14 @@
-"""Poses: the rotation of sensor chips (seed 002, Eqs. 3-4) and of magnets.
+"""Poses: the rotation of sensor chips (seed 002, Eqs. 3-4) and of magnets, and the sensor grid.
 
 An orientation is three angles (alpha, beta, gamma) (rad); a vector v given in the scene
 (world) frame reads, in the body's own frame,
 
     v_body = Rx(alpha) Ry(beta) Rz(gamma) v
 
-(:func:`magdesign.transducers.rotation_matrix`). For a chip the body frame is (a, b, c),
-``a`` its sensitive in-plane axis and ``c`` its normal; for a magnet it is the frame of
-:func:`magdesign.fields.cylinder` (centre at the origin, axis z).
+(:func:`magdesign.transducers.rotation_matrix`; a field is taken into the chips' frames by
+:func:`magdesign.transducers.to_chip`, the one home of that rotation). For a chip the body
+frame is (a, b, c), ``a`` its sensitive in-plane axis and ``c`` its normal; for a magnet it
+is the frame of :func:`magdesign.fields.cylinder` (centre at the origin, axis z).
 """
 
 import equinox as eqx
@@ -15,18 +16,13 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign.fields import cylinder
-from magdesign.transducers import rotation_matrix
+from magdesign.transducers import rotation_matrix, to_chip
 
 
 def rotation(angles: Float[ArrayLike, "... 3"]) -> Float[Array, "... 3 3"]:
     """Rx(alpha) Ry(beta) Rz(gamma) for ``angles = (alpha, beta, gamma)`` (rad), (..., 3, 3)."""
     angles = jnp.asarray(angles, dtype=float)
     return rotation_matrix(angles[..., 0], angles[..., 1], angles[..., 2])
-
-
-def to_chip(rotations: Float[ArrayLike, "s 3 3"], field: Float[ArrayLike, "*n s 3"]) -> Float[Array, "*n s 3"]:
-    """The field (T) expressed in each chip's frame: ``rotations @ field`` per chip."""
-    return jnp.einsum("...ij,...j->...i", rotations, field)
 
 
 def posed_cylinder(
@@ -71,3 +67,12 @@ class Magnet(eqx.Module):
             points, centre=centre, angles=self.angles, radius=self.radius, height=self.height,
             polarization=self.polarization, fidelity=fidelity,
         )
+
+
+def grid_positions(shape: tuple[int, int], pitch) -> Float[Array, "s 3"]:
+    """Centres (S, 3) (m) of a rows x cols grid at ``pitch`` (m) in z = 0, centred on the origin."""
+    rows, cols = shape
+    x = (jnp.arange(cols) - (cols - 1) / 2) * pitch
+    y = (jnp.arange(rows) - (rows - 1) / 2) * pitch
+    xx, yy = jnp.meshgrid(x, y)
+    return jnp.stack([xx.ravel(), yy.ravel(), jnp.zeros(xx.size)], axis=-1)

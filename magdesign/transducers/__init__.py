@@ -1,6 +1,7 @@
 """Transducers: Hall, GMR / spin valve and inductor read-outs (SI: T, V, A, Ohm)."""
 
 from magdesign.transducers.gmr import chip_frame as chip_frame
+from magdesign.transducers.gmr import to_chip as to_chip
 from magdesign.transducers.gmr import inesc_spin_valve as inesc_spin_valve
 from magdesign.transducers.gmr import panasonic_meander as panasonic_meander
 from magdesign.transducers.gmr import rotation_matrix as rotation_matrix

@@ -43,6 +43,13 @@ def rotation_matrix(
     return rx @ ry @ rz
 
 
+def to_chip(rotations: Float[ArrayLike, "... 3 3"], field: Float[ArrayLike, "... 3"]) -> Float[Array, "... 3"]:
+    """The field (any unit) expressed in each chip's frame: ``rotations @ field``, the
+    rotations (..., 3, 3) broadcast against the field (..., 3) (one per chip: (S, 3, 3)
+    against (n, S, 3))."""
+    return jnp.einsum("...ij,...j->...i", rotations, field)
+
+
 def chip_frame(
     h: Float[ArrayLike, "... 3"],
     alpha: Float[ArrayLike, "..."] = 0.0,
@@ -50,7 +57,7 @@ def chip_frame(
     gamma: Float[ArrayLike, "..."] = 0.0,
 ) -> Float[Array, "... 3"]:
     """The field ``h`` (any unit), (..., 3), in the chip frame (H_a, H_b, H_c), Eq. 3."""
-    return jnp.einsum("...ij,...j->...i", rotation_matrix(alpha, beta, gamma), jnp.asarray(h))
+    return to_chip(rotation_matrix(alpha, beta, gamma), jnp.asarray(h))
 
 
 class SpinValve(eqx.Module):
