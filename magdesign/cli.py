@@ -30,7 +30,7 @@ from magdesign.design import solve as solve_problem
 from magdesign.design.plot import plot_design
 from magdesign.design.report import format_quantity
 from magdesign.design.spec import default_spec, exact_levels, fidelity_levels, load_spec, problem_from_spec
-from magdesign.scene import (loads_from_spec, outputs, scene_from_spec, simulate, simulation_json, simulation_table,
+from magdesign.scene import (loads_from_spec, scene_from_spec, simulate, simulation_json, simulation_table,
                              with_parameters)
 from magdesign.scene.picture import plot_scene
 from magdesign.units import SpecError
@@ -106,9 +106,19 @@ def build_parser():
     return parser
 
 
+def scene_at_start(spec):
+    """(scene, {variable: start} (SI)): a design spec's scene with every [design.variables]
+    entry at its start; a scene spec's scene as written and {}."""
+    if "design" not in spec:
+        return scene_from_spec(spec), {}
+    problem, scene = problem_from_spec(spec)
+    start = {v.name: float(v.start) for v in problem.variables}
+    return with_parameters(scene, start), start
+
+
 def run_show(args):
     spec = load_spec(args.spec)
-    plot_scene(scene_from_spec(spec), loads_from_spec(spec), args.plot, title=args.spec)
+    plot_scene(scene_at_start(spec)[0], loads_from_spec(spec), args.plot, title=args.spec)
     print(f"wrote {args.plot}")
     return 0
 
@@ -122,15 +132,19 @@ def run_solve(args):
     first = solve_problem(problem)
     answers = [(levels, problem, first)]
     exact = exact_levels(spec) if auto else None
+    if exact is not None and not all(math.isfinite(value) for value in first.parameters.values()):
+        print("magdesign solve: the first answer is not finite; no confirmation at the exact levels", file=sys.stderr)
+        exact = None
     if exact is not None:
         # Confirm at the exact levels, from the cheap answer: a few steps of the costly model.
         exact_problem, _ = problem_from_spec(exact)
         confirming = fidelity_levels(exact)
         _progress(args, f"confirming at {confirming}, from that answer")
-        confirmed = solve_problem(exact_problem, start=first.parameters)
+        start = {v.name: min(max(first.parameters[v.name], float(v.lower)), float(v.upper)) for v in exact_problem.variables}
+        confirmed = solve_problem(exact_problem, start=start)
         answers.append((confirming, exact_problem, confirmed))
     levels, problem, result = answers[-1]
-    warm = solve_problem(problem, start=answers[-2][2].parameters if exact else None) if args.timing else None
+    warm = solve_problem(problem, start=start if exact else None) if args.timing else None
     if args.json:
         document = {**result.to_json(), "fidelity": levels, "objective": _objective(problem, result)}
         if exact is not None:
@@ -179,15 +193,11 @@ def _difference(cheap, exact, cheap_levels, exact_levels_name):
 
 def run_simulate(args):
     spec = load_spec(args.spec)
-    scene, loads = scene_from_spec(spec), loads_from_spec(spec)
-    start = {}
-    if "design" in spec:
-        # a design spec simulates its start point: the scene with every variable at its start
-        problem, scene = problem_from_spec(spec)
-        start = {v.name: float(v.start) for v in problem.variables}
-        scene = with_parameters(scene, start)
+    scene, start = scene_at_start(spec)
+    loads = loads_from_spec(spec)
     result = simulate(scene, loads, key=jax.random.key(0))
-    values = {name: float(value) for name, value in outputs(scene, loads).items()}
+    # the outputs read no reading after the reading effects: the noisy simulation gives them too
+    values = {name: float(value) for name, value in scene.outputs(result).items()}
     if args.json:
         print(json_text({**simulation_json(result), "start": start, "outputs": values,
                          "output_units": scene.output_units}))
@@ -198,7 +208,7 @@ def run_simulate(args):
         print(simulation_table(result))
         print("outputs (docs/outputs.md): " + ", ".join(
             f"{name} = {value:.6g} {scene.output_units.get(name, '1').removeprefix('1')}".rstrip()
-            for name, value in values.items()))
+            for name, value in values.items() if math.isfinite(value)))
     return 0 if bool(result.converged.all()) else EXIT_NOT_SOLVED
 
 

@@ -89,6 +89,9 @@ def _mechanics(spec, fidelity, models=("dome", "layer")):
         if fidelity not in levels:
             raise SpecError(f"fidelity: expected one of {', '.join(map(repr, levels))} for a {model}, got {fidelity!r}")
         mechanics = dataclasses.replace(mechanics, fidelity=fidelity)
+    if mechanics.fidelity == "axisymmetric" and isinstance(mechanics.material, LinearElastic):
+        raise SpecError("mechanics.material: the axisymmetric dome needs a finite-strain law (mooney_rivlin or "
+                        "neo_hookean); 'linear' holds for the reissner level only")
     return mechanics
 
 

@@ -139,7 +139,8 @@ def with_parameters(scene: AbstractScene, values: Mapping[str, ArrayLike]) -> Ab
     return eqx.tree_at(lambda s: [get(s) for get in getters], scene, replacements)
 
 
-def _apply_source_effects(scene, effects):
+def apply_source_effects(scene: AbstractScene, effects) -> AbstractScene:
+    """The scene with the source effects among ``effects`` applied to its source's strength."""
     for effect in effects:
         scale = effect.source_scale()
         if scale is not None:
@@ -179,7 +180,7 @@ def chain(
     "viscoelastic_lag" to get the deterministic, static forward model).
     """
     effects = tuple(effect for effect in scene.effects if effect.name not in without)
-    scene = _apply_source_effects(scene, effects)
+    scene = apply_source_effects(scene, effects)
     positions, rotations = scene.sensor_poses()
     for effect in effects:
         positions, rotations = effect.sensors(positions, rotations)

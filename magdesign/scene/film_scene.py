@@ -22,8 +22,8 @@ uniform along y, so only the x shear changes the field.
 Outputs (:meth:`FilmScene.outputs`), at the central taxel (the middle of the grid; one
 of the middle four of an even grid), through the scene's chain with its field effects
 (see docs/outputs.md):
-    field_fraction      |B| at the taxel at rest (zero load) over |B| of the film alone at
-                        its face (-); e^{-k h} for the infinite film
+    field_fraction      |B| at the taxel at rest (zero load) over |B| of the film alone (with
+                        its source effects) at its face (-); e^{-k h} for the infinite film
     normal_sensitivity  d|B| / dFz there at rest (T/N); k |B| / k_n for the infinite film
     shear_phase_max     k times the largest |u_x| of the sweep (rad)
     normal_compliance   1 / k_n (m/N);  shear_compliance  1 / k_s (m/N)
@@ -37,7 +37,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from magdesign.fields import film
-from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
+from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, apply_source_effects, chain
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.loads import Loads
 from magdesign.scene.mechanics import Layer
@@ -120,7 +120,8 @@ class FilmScene(AbstractScene):
             return jnp.linalg.norm(chain(self, displacement, without=STATIC_WITHOUT).field[0, centre])
 
         at_taxel, slope = jax.jvp(magnitude, (jnp.zeros(()),), (jnp.ones(()),))
-        at_face = jnp.linalg.norm(self.source_field(jnp.array([0.0, 0.0, 1.0]) * self.layer.thickness, jnp.zeros(3)))
+        film = apply_source_effects(self, self.effects)  # a drifted film is weaker at its face too
+        at_face = jnp.linalg.norm(film.source_field(jnp.array([0.0, 0.0, 1.0]) * self.layer.thickness, jnp.zeros(3)))
         return {
             "field_fraction": at_taxel / at_face,
             "normal_sensitivity": slope,

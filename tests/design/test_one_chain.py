@@ -51,7 +51,14 @@ def _magnet_measures(sim, parameters, scene):
     uz = np.asarray(sim.displacement)[:, 2]
     chip = np.asarray(sim.chip_field)
     gap = parameters.get("geometry.gap", float(scene.gap))
+    mechanics = scene.mechanics
+    thickness = parameters.get("mechanics.thickness", float(mechanics.thickness))
+    if hasattr(mechanics, "outer_radius"):  # a dome bottoms out at its inner height
+        room = parameters.get("mechanics.outer_radius", float(mechanics.outer_radius)) - thickness
+    else:  # a layer when pressed to nothing
+        room = thickness
     return {
+        "travel_fraction": np.max(-uz) / room,
         "compliance": (uz[0] - uz[top]) / press,
         "closest_gap": gap + uz.min(),
         "field_rest": chip[0, 0, 2],
@@ -69,8 +76,10 @@ def _film_measures(sim, parameters, scene, simulate_at):
     centre = (rows // 2) * cols + cols // 2
     period = parameters.get("magnet.period", float(scene.period))
     k = 2 * np.pi / period
-    # |B| of an infinite film at its own face: J0 (1 - e^{-kd}) (PHYSICS.md 1.2)
-    face = float(scene.magnetization) * (1 - np.exp(-k * float(scene.film_thickness)))
+    # |B| of an infinite film at its own face: J0 (1 - e^{-kd}) (PHYSICS.md 1.2), J0 drifted
+    drift = [e for e in scene.effects if e.name == "temperature_drift"]
+    j0 = float(scene.magnetization) * (1 + float(drift[0].coefficient * drift[0].temperature_change) if drift else 1.0)
+    face = j0 * (1 - np.exp(-k * float(scene.film_thickness)))
     around_rest = np.linalg.norm(np.asarray(simulate_at(Loads(np.array([-FORCE_STEP, 0.0, FORCE_STEP]))).field)[:, centre], axis=-1)
     return {
         "field_fraction": around_rest[1] / face,
