@@ -36,12 +36,12 @@ from jaxtyping import Array, ArrayLike, Float, Int
 
 from magdesign._numerics import FD_JACOBIAN_STEP, LSQ_ATOL, LSQ_RTOL, safe_div
 from magdesign.inverse._jacobian import difference_jacobian
-from magdesign.scene.core import AbstractScene, chain
+from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 
-# Effects that the static, deterministic forward model of an inverse leaves out: noise
-# and the lag are not functions of one displacement; quantisation is piecewise constant
-# (zero derivative) and is treated as part of the noise.
-NOT_INVERTED = ("noise", "viscoelastic_lag", "quantisation")
+# Effects that the static, deterministic forward model of an inverse leaves out: those of the
+# static chain (noise and the lag are not functions of one displacement), and quantisation,
+# piecewise constant (zero derivative) and treated as part of the noise.
+NOT_INVERTED = (*STATIC_WITHOUT, "quantisation")
 SOLVERS = ("levenberg_marquardt", "gauss_newton")
 # Largest chi2 (in units of the noise variance) of a fit that counts as explaining the
 # readings: with one to a few spare readings, chi2 > 25 has a probability below 1e-4
