@@ -100,17 +100,46 @@ def _si_unit(output_units, name):
     return None if unit == "1" else unit
 
 
-def _check_dome_wall(scene, variables):
-    """SpecError unless some dome within the variables' bounds has a wall thinner than its radius."""
+def _dome_wall_guards(scene, variables):
+    """[the geometry limit ``wall_fraction <= 1``] where the variables' box holds domes
+    whose wall is not thinner than their radius, else []; SpecError if it holds no dome."""
     mechanics = getattr(scene, "mechanics", None)
     if not isinstance(mechanics, Dome):
-        return
+        return []
     bounds = {v.name: v for v in variables}
-    thinnest = float(bounds["mechanics.thickness"].lower) if "mechanics.thickness" in bounds else float(mechanics.thickness)
-    largest = (float(bounds["mechanics.outer_radius"].upper) if "mechanics.outer_radius" in bounds
-               else float(mechanics.outer_radius))
+
+    def extreme(name, side, fixed):
+        return float(getattr(bounds[name], side)) if name in bounds else float(fixed)
+
     key = "design.variables.mechanics.thickness.lower" if "mechanics.thickness" in bounds else "mechanics.thickness"
-    check_wall(thinnest, largest, key=key)
+    check_wall(extreme("mechanics.thickness", "lower", mechanics.thickness),
+               extreme("mechanics.outer_radius", "upper", mechanics.outer_radius), key=key)
+    if extreme("mechanics.thickness", "upper", mechanics.thickness) < extreme("mechanics.outer_radius", "lower", mechanics.outer_radius):
+        return []
+    return [Limit("wall_fraction", upper=1.0)]
+
+
+def _with_guards(limits, guards):
+    """The spec's limits with the geometry guards merged in: a guard on an output the spec
+    does not limit is added; on one it limits, the stricter bound of each side holds (a
+    spec's ``closest_gap <= 10 mm`` gains the side ``closest_gap >= 0``; its
+    ``closest_gap >= 1 mm`` is kept as written)."""
+    merged = {limit.output: limit for limit in limits}
+    for guard in guards:
+        spec = merged.get(guard.output)
+        if spec is None:
+            merged[guard.output] = guard
+            continue
+        upper = [b for b in (spec.upper, guard.upper) if b is not None]
+        lower = [b for b in (spec.lower, guard.lower) if b is not None]
+        merged[guard.output] = Limit(
+            guard.output,
+            upper=min(upper, key=float) if upper else None,
+            lower=max(lower, key=float) if lower else None,
+            scale=spec.scale,
+            unit=spec.unit,
+        )
+    return list(merged.values())
 
 
 # Models with cheaper levels: (table, key, model) -> (name in a report, the spec's default
@@ -200,7 +229,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         with _named(where):
             variables.append(Variable(name, unit=None if shown == "1" else shown, **values))
 
-    _check_dome_wall(scene, variables)
+    wall_guards = _dome_wall_guards(scene, variables)
 
     targets = []
     for name, value in sub_table(design, "targets", where="design.targets", required=False).items():
@@ -263,13 +292,11 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         raise SpecError("design: expected at least one of [design.targets], [design.limits], [design.objective]")
 
     # The geometry is a limit every design meets or reports: the magnet never reaches the sensor
-    # plane, and the dome or layer never travels beyond its own room (a load that drives the
-    # magnet through gives limit_violated, not a negative gap).
-    limited = [lim.output for lim in limits]
-    if isinstance(scene, MagnetScene) and "closest_gap" not in limited:
-        limits.append(Limit("closest_gap", lower=0.0, scale=float(scene.height), unit="mm"))
-    if isinstance(scene, MagnetScene) and "travel_fraction" not in limited:
-        limits.append(Limit("travel_fraction", upper=1.0))
+    # plane, the dome or layer never travels beyond its own room, a dome's wall is thinner than
+    # its radius (a load that drives the magnet through gives limit_violated, not a negative gap).
+    if isinstance(scene, MagnetScene):
+        guards = [Limit("closest_gap", lower=0.0, scale=float(scene.height), unit="mm"), Limit("travel_fraction", upper=1.0)]
+        limits = _with_guards(limits, guards + wall_guards)
     converged = MECHANICS_CONVERGED if MECHANICS_CONVERGED in known_outputs else None
     with _named("design"):
         problem = Problem(

@@ -88,14 +88,20 @@ class Dome(AbstractMechanics):
         )
         return compliance, result == mechanics.DomeResult.successful
 
-    output_units: ClassVar = {**AbstractMechanics.output_units, "outer_radius": "m"}
+    output_units: ClassVar = {**AbstractMechanics.output_units, "outer_radius": "m", "wall_fraction": "1"}
 
     def travel_room(self):
         """The dome's inner height R_o - t: the apex meets the base plane there."""
         return self.outer_radius - self.thickness
 
     def outputs(self, displacement):
-        return {**super().outputs(displacement), "outer_radius": self.outer_radius}
+        """The common outputs, the outer radius (m) and ``wall_fraction``, the wall over the
+        outer radius (a dome exists below 1)."""
+        return {
+            **super().outputs(displacement),
+            "outer_radius": self.outer_radius,
+            "wall_fraction": self.thickness / self.outer_radius,
+        }
 
     def displacement(self, loads):
         compliance, converged = self.compliance(loads.normal)

@@ -68,3 +68,34 @@ def test_bad_design_specs_name_the_key(path, value, key):
         problem_from_spec(_broken(path, value))
     message = str(error.value)
     assert message.removeprefix("[").startswith(key) and "\n" not in message  # "[design]: missing table"
+
+
+def _limits(spec):
+    problem, _ = problem_from_spec(spec)
+    return {limit.output: limit for limit in problem.limits}
+
+
+def test_geometry_guards_join_the_specs_own_limits():
+    """A spec's one-sided limit on a guarded output gains the guard's other side; a
+    stricter bound on the guard's side is kept as written."""
+    spec = default_spec()
+    limits = _limits(spec)
+    assert float(limits["closest_gap"].lower) == 0.0 and limits["closest_gap"].upper is None
+    assert float(limits["travel_fraction"].upper) == 1.0
+    assert "wall_fraction" not in limits  # a 2-4 mm wall always fits in an 8 mm dome
+    spec["design"]["limits"]["closest_gap"] = {"upper": "10 mm"}
+    spec["design"]["limits"]["travel_fraction"] = {"upper": "0.5"}
+    limits = _limits(spec)
+    assert float(limits["closest_gap"].lower) == 0.0 and float(limits["closest_gap"].upper) == pytest.approx(0.01)
+    assert float(limits["travel_fraction"].upper) == 0.5
+    spec["design"]["limits"]["closest_gap"] = {"lower": "1 mm"}
+    assert float(_limits(spec)["closest_gap"].lower) == pytest.approx(1e-3)
+
+
+def test_a_box_that_holds_walls_as_thick_as_the_dome_gets_the_wall_guard():
+    with open(EXAMPLES / "dome_radius.toml", "rb") as file:
+        spec = tomllib.load(file)
+    # radius from 3 mm, wall up to 4 mm: some corners of the box are no dome
+    assert float(_limits(spec)["wall_fraction"].upper) == 1.0
+    spec["design"]["variables"]["mechanics.outer_radius"]["lower"] = "5 mm"
+    assert "wall_fraction" not in _limits(spec)

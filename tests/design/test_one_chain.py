@@ -68,6 +68,7 @@ def _magnet_measures(sim, parameters, scene):
         "inplane_field_max": np.abs(chip[..., 0]).max(),
         "inplane_field_min": chip[..., 0].min(),
         "outer_radius": parameters.get("mechanics.outer_radius"),
+        "wall_fraction": thickness / parameters.get("mechanics.outer_radius", float(getattr(mechanics, "outer_radius", np.nan))),
     }
 
 
