@@ -9,6 +9,8 @@ The [magnet] table's ``shape`` picks the scene type: "cylinder" (seeds 001-003,
 
 import dataclasses
 
+import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -381,4 +383,6 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
                     if wanted]
     if needs_series and points < 2:
         raise SpecError(f"load.points: {needs_series[0]} needs a time series of at least 2 load points, got {points}")
-    return scene
+    # strongly typed leaves, as with_parameters makes them: a jitted function of the scene
+    # then compiles once for the spec's scene and for any copy with new parameter values
+    return jax.tree.map(lambda leaf: jnp.asarray(leaf, dtype=leaf.dtype) if eqx.is_inexact_array(leaf) else leaf, scene)
