@@ -10,6 +10,7 @@ source.
 import argparse
 import json
 import math
+import re
 import pathlib
 import sys
 import time
@@ -73,8 +74,9 @@ class Report:
         self.lines += [paragraph.strip(), ""]
 
     def table(self, headers, rows) -> None:
-        """A markdown table; numbers are written with :func:`number`."""
-        cells = [[number(c) for c in row] for row in rows]
+        """A markdown table; numbers are written with :func:`number`, a bare ``|`` in a
+        cell is escaped."""
+        cells = [[re.sub(r"(?<!\\)\|", r"\\|", number(c)) for c in row] for row in rows]
         self.lines.append("| " + " | ".join(headers) + " |")
         self.lines.append("|" + "---|" * len(headers))
         self.lines += ["| " + " | ".join(row) + " |" for row in cells]

@@ -138,9 +138,10 @@ class PoleScene(AbstractScene):
     def transduce(self, field):
         return self.transducer(field)[..., None]
 
-    def _tangential_force(self, theta):
-        """The plate's pull on the rod's charges as a generalised force along theta,
-        per ball radius (N): sum F_i . dp_i/dtheta / r_b."""
+    def tangential_force(self, theta):
+        """The plate's pull on the rod's charges at tilt ``theta`` (rad) as a generalised
+        force along theta, per ball radius (N): sum F_i . dp_i/dtheta / r_b (the torque
+        about the ball's centre over r_b). Negative for theta > 0 where it restores."""
 
         def ends(angle):
             return self.charges(self.tip(angle) - self.tip(0.0))[0]
@@ -159,6 +160,6 @@ class PoleScene(AbstractScene):
         pull = charges[:, None] * self.plate_field(positions) / MU0
         return {
             "field_sensitivity": jax.grad(field_a)(0.0),
-            "spring_coefficient": -jax.grad(self._tangential_force)(0.0),
+            "spring_coefficient": -jax.grad(self.tangential_force)(0.0),
             "attraction": -jnp.sum(pull[:, 2]),
         }
