@@ -186,13 +186,13 @@ def slip_study(report, scene, noise, quick, key):
     time, u, spans = slip_series(events, rng)
     displacement = np.column_stack([u, np.full(len(time), -NORMAL_FORCE / float(scene.mechanics.stiffness.normal))])
     progress(f"simulating {len(events)} stick-slip events ({len(time)} samples at 1 kHz) through the inductors")
-    result = simulate(scene, loads_for(scene, displacement, time), key=key)
-    clean = np.asarray(result.extras["inductor_emf"])
-    # The scene's noise effect acts on the GMR readings only; the inductors go through the
-    # same A/D board (Sec. III-A), so the same noise is added to their outputs here.
-    output = clean + noise * rng.standard_normal(clean.shape)
+    loads = loads_for(scene, displacement, time)
+    result = simulate(scene, loads, key=key)
+    # the inductors' outputs carry the spec's inductors.noise (the same A/D board as the
+    # GMR readings, Sec. III-A), drawn by simulate from its key; their flags are the scene's
+    output = np.asarray(result.extras["inductor_emf"])
     window = scene.inductors.window
-    flags = slip_flags(output, window=window)
+    flags = np.asarray(result.extras["slip"])
     detected, false_alarms = score(flags, spans)
     single = [score(slip_flags(output[:, c], window=window), spans) for c in range(output.shape[1])]
     minutes = time[-1] / 60.0
@@ -213,6 +213,7 @@ def slip_study(report, scene, noise, quick, key):
         ok = np.array([rate[(d, t)] >= DETECTION_RATE for t in RELEASE_TIMES])
         threshold[d] = float(speeds[ok].min()) if ok.any() else float("nan")
     # the weakest of the four inductors' peak |EMF| during each release, its smallest over the population
+    clean = np.asarray(simulate(scene, loads, without=("noise",)).extras["inductor_emf"])
     weakest = [np.abs(clean[a - 1:b + 2]).max(axis=0).min() for a, b in spans[population]]
 
     report.result("slip_events", len(events))
@@ -226,7 +227,7 @@ def slip_study(report, scene, noise, quick, key):
     report.result("slip_detection_rate_by_speed", {f"{d * 1e3:g}mm_{t * 1e3:g}ms": float(r) for (d, t), r in rate.items()})
     report.result("slip_detection_rate_by_angle", {f"{a:g}deg": float(r) for a, r in by_angle.items()})
     report.result("slip_speed_for_90_percent", {f"{d * 1e3:g}mm": v for d, v in threshold.items()})
-    report.result("inductor_noise", noise)
+    report.result("inductor_noise", float(scene.inductors.noise))
     return dict(time=time, u=u, output=output, flags=np.asarray(flags), spans=spans, events=events,
                 detected=detected, false_alarms=false_alarms, single=single, minutes=minutes, rate=rate,
                 by_angle=by_angle, threshold=threshold, population=population, small=small, weakest=min(weakest), window=window)
@@ -367,9 +368,9 @@ def main(argv=None):
         "to 0 linearly in the release time (slip), starting anywhere between two samples; 30 ms at rest, then the "
         "next event. The magnet follows the layer (`Loads` through the spec's Hooke layer). Sampling 1 kHz (Fig. 13). "
         f"Inductor output = {float(scene.inductors.amplification):g} x (-N d(Bz A)/dt), N = "
-        f"{float(scene.inductors.turns):g}, from `simulate` plus Gaussian A/D noise of "
-        f"{noise * 1e3:g} mV (the spec's `noise`; the library's noise effect does not reach the inductors, so the "
-        f"study adds it). Rule: `magdesign.transducers.slip_flags`, mean +- 3 sigma over the last {s['window']} samples "
+        f"{float(scene.inductors.turns):g}, from `simulate`, with Gaussian A/D noise of "
+        f"{float(scene.inductors.noise) * 1e3:g} mV (the spec's `inductors.noise`, the same board as the GMR readings). "
+        f"Rule: the scene's slip flags (`magdesign.transducers.slip_flags`), mean +- 3 sigma over the last {s['window']} samples "
         "(the spec's window; the paper's N is not given), a slip where all four inductors are outside at once. "
         "A slip counts as detected if a flag falls between one sample before its release and two samples after it; "
         "every other flagged run is a false alarm. All events are shuffled into one record of "

@@ -21,12 +21,12 @@ DOMAINS = {
         ["magnet.radius", "magnet.height", "magnet.remanence", "magnet.period", "magnet.thickness",
          "magnet.magnetization", "mechanics.outer_radius", "mechanics.thickness", "mechanics.contact_area",
          "mechanics.c10", "mechanics.youngs_modulus", "mechanics.shear_modulus", "mechanics.bulk_modulus",
-         "mechanics.spring", "geometry.gap", "pole.ball_radius", "pole.diameter", "inductors.area",
+         "mechanics.spring", "geometry.gap", "pole.ball_radius", "pole.diameter", "pole.length", "inductors.area",
          "inductors.turns", "sensor.amplification", "inductors.amplification", "scene.area",
          "scene.lag_time_constant", "scene.saturation_limit", "scene.lsb"],
         _POSITIVE,
     ),
-    **dict.fromkeys(["mechanics.c01", "sensor.pitch", "scene.noise", "sensor.height"], _NONNEGATIVE),
+    **dict.fromkeys(["mechanics.c01", "sensor.pitch", "scene.noise", "sensor.height", "inductors.noise"], _NONNEGATIVE),
     "mechanics.poisson_ratio": (-1.0, False, 0.5, False),
     "pole.demagnetizing_factor": (0.0, False, 1.0, True),
 }
@@ -34,7 +34,7 @@ DOMAINS = {
 PARAMETER_UNITS = {
     **dict.fromkeys(["geometry.gap", "magnet.radius", "magnet.height", "magnet.period", "magnet.thickness",
                      "mechanics.outer_radius", "mechanics.thickness", "sensor.pitch", "pole.ball_radius",
-                     "pole.diameter", "sensor.offset", "sensor.height"], "m"),
+                     "pole.diameter", "pole.length", "sensor.offset", "sensor.height"], "m"),
     **dict.fromkeys(["magnet.remanence", "magnet.magnetization"], "T"),
     **dict.fromkeys(["mechanics.c10", "mechanics.c01", "mechanics.youngs_modulus", "mechanics.shear_modulus",
                      "mechanics.bulk_modulus"], "Pa"),

@@ -273,6 +273,7 @@ def _cylinder_scene(spec, fidelity):
             area=jnp.asarray(table.quantity("area", "m^2")),
             turns=jnp.asarray(table.quantity("turns", "1")),
             amplification=jnp.asarray(table.quantity("amplification", "1", default=1.0)),
+            noise=jnp.asarray(table.quantity("noise", "V", default=0.0)),
             window=table.integer("window", default=20, minimum=2),
         )
         table.done()
@@ -334,6 +335,10 @@ def _pole_scene(spec, fidelity):
     ball_radius = pole.quantity("ball_radius", "m")
     diameter = pole.quantity("diameter", "m")
     demag = pole.quantity("demagnetizing_factor", "1")
+    length = pole.quantity("length", "m", default=2.0 * ball_radius)  # the rod through the whole ball
+    if length > 2.0 * ball_radius:
+        raise SpecError(f"pole.length: a {length * 1e3:g} mm rod does not fit in a ball of radius "
+                        f"{ball_radius * 1e3:g} mm; expected at most its diameter")
     pole.done()
     mechanics = Table(spec, "mechanics")
     mechanics.choice("model", ("tilt",))
@@ -355,6 +360,7 @@ def _pole_scene(spec, fidelity):
         gap=jnp.asarray(gap),
         ball_radius=jnp.asarray(ball_radius),
         pole_diameter=jnp.asarray(diameter),
+        pole_length=jnp.asarray(length),
         demagnetizing_factor=jnp.asarray(demag),
         spring=jnp.asarray(spring),
         sensor_offset=jnp.asarray(offset),

@@ -81,10 +81,12 @@ class AbstractScene(eqx.Module):
         return None
 
     def extras(
-        self, displacement: Float[Array, "n 3"], loads: Loads, probe_field: Float[Array, "n e 3"] | None
+        self, displacement: Float[Array, "n 3"], loads: Loads, probe_field: Float[Array, "n e 3"] | None,
+        key: PRNGKeyArray | None = None,
     ) -> dict[str, Array]:
         """Further read-outs of a simulation (e.g. inductor EMF, slip flags), given the
-        field (T, scene frame, no field effects) at :meth:`probe_points`."""
+        field (T, scene frame, no field effects) at :meth:`probe_points`; ``key`` draws
+        their own noise (None: noiseless)."""
         return {}
 
 
@@ -217,12 +219,14 @@ def simulate(
 ) -> SimulationResult:
     """Run the scene's forward chain over ``loads``, with exactly the scene's effects (jitted).
 
-    ``key`` (a JAX PRNG key) is needed only when the scene lists ``noise``; effects named in
-    ``without`` are left out.
+    ``key`` (a JAX PRNG key) is needed when the scene lists ``noise``, and draws the noise of
+    further read-outs (the inductors'); without it they are noiseless. Effects named in
+    ``without`` are left out (with "noise", the further read-outs are noiseless too).
     """
     displacement, converged = scene.displacement(loads)
     passed = chain(scene, displacement, time=loads.time, key=key, without=without)
-    extras = scene.extras(passed.displacement, loads, passed.probe_field)
+    extras_key = None if key is None or "noise" in without else jax.random.fold_in(key, 1)
+    extras = scene.extras(passed.displacement, loads, passed.probe_field, extras_key)
     return SimulationResult(
         loads, converged, passed.displacement, passed.field, passed.chip_field, passed.readings, extras,
         scene.reading_labels, scene.reading_unit,

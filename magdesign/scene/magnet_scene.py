@@ -46,7 +46,7 @@ from magdesign.scene.core import MECHANICS_CONVERGED, AbstractScene
 from magdesign.scene.effects import AbstractEffect, effect_output_units, effect_outputs
 from magdesign.scene.mechanics import AbstractMechanics
 from magdesign.scene.pose import Magnet, posed_cylinder, rotation
-from magdesign.transducers import emf, slip_flags, Hall3D, SpinValve
+from magdesign.transducers import add_noise, emf, slip_flags, Hall3D, SpinValve
 
 class SpinValveReadout(eqx.Module):
     """A spin valve's output voltage, optionally amplified as a bridge difference.
@@ -70,13 +70,17 @@ class Inductors(eqx.Module):
     """Seed 003's chip inductors: EMF = -N d(Bz A)/dt, amplified, and the slip flags.
 
     ``positions`` (I, 3) (m), ``area`` the coil's mean turn area (m^2), ``turns`` N,
-    ``amplification`` (-); ``window`` samples of history for the 3-sigma slip test.
+    ``amplification`` (-), ``noise`` the output's Gaussian noise (V rms, drawn when a
+    simulation has a key); ``window`` samples of history for the 3-sigma slip test, which
+    judges the noisy output (on a noiseless one any rounding leaves a constant history's
+    zero-width band).
     """
 
     positions: Float[Array, "i 3"]
     area: Float[Array, ""]
     turns: Float[Array, ""]
     amplification: Float[Array, ""]
+    noise: Float[Array, ""]
     window: int = eqx.field(static=True)
 
 
@@ -191,11 +195,13 @@ class MagnetScene(AbstractScene):
     def probe_points(self):
         return None if self.inductors is None else self.inductors.positions
 
-    def extras(self, displacement, loads, probe_field):
+    def extras(self, displacement, loads, probe_field, key=None):
         if self.inductors is None:
             return {}
         coils = self.inductors
         bz = probe_field[..., 2]
         dt = loads.time[1] - loads.time[0]
         output = coils.amplification * emf(bz * coils.area, dt=dt, turns=coils.turns)
+        if key is not None:
+            output = add_noise(output, key, coils.noise)
         return {"inductor_emf": output, "slip": slip_flags(output, window=coils.window)}

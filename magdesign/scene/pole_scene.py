@@ -1,6 +1,7 @@
 """Seed 000, reduced model: a soft-magnetic pole in a ball over a magnet plate.
 
-A plastic ball of radius r_b carries a Ni-Fe rod (diameter d_p) along a diameter; its
+A plastic ball of radius r_b carries a Ni-Fe rod (diameter d_p) along a diameter, from the
+ball's bottom up for its length (``pole.length``, default the whole diameter 2 r_b); its
 bottom sits ``gap`` above a permanent-magnet plate (a disc of radius R, thickness t,
 remanence Br = mu0 Hc, top face at z = 0). Tilting the ball by theta about y moves
 the rod's lower tip to c + r_b (sin theta, 0, -cos theta), c the ball's centre.
@@ -62,6 +63,7 @@ class PoleScene(AbstractScene):
     gap: Float[Array, ""]
     ball_radius: Float[Array, ""]
     pole_diameter: Float[Array, ""]
+    pole_length: Float[Array, ""]
     demagnetizing_factor: Float[Array, ""]
     spring: Float[Array, ""]
     sensor_offset: Float[Array, ""]
@@ -83,6 +85,7 @@ class PoleScene(AbstractScene):
             "geometry.gap": lambda s: s.gap,
             "pole.ball_radius": lambda s: s.ball_radius,
             "pole.diameter": lambda s: s.pole_diameter,
+            "pole.length": lambda s: s.pole_length,
             "pole.demagnetizing_factor": lambda s: s.demagnetizing_factor,
             "mechanics.spring": lambda s: s.spring,
             "sensor.offset": lambda s: s.sensor_offset,
@@ -109,9 +112,10 @@ class PoleScene(AbstractScene):
         return self._rod(tip, self.plate_field(tip))
 
     def _rod(self, tip, tip_field):
-        """The rod's charges given its lower tip (3,) (m) and the plate's field there (T)."""
-        top = 2.0 * self.centre - tip
-        axis = (top - tip) / (2.0 * self.ball_radius)
+        """The rod's charges given its lower tip (3,) (m) and the plate's field there (T):
+        the rod runs from the tip towards the ball's centre for ``pole_length``."""
+        axis = (self.centre - tip) / self.ball_radius
+        top = tip + self.pole_length * axis
         area = jnp.pi * self.pole_diameter**2 / 4
         charge = area * jnp.dot(tip_field, axis) / self.demagnetizing_factor
         return jnp.stack([tip, top]), jnp.stack([-charge, charge])

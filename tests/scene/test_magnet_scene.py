@@ -4,6 +4,7 @@ seed 003's slip flags."""
 import jax
 import magpylib as magpy
 import numpy as np
+import pytest
 
 from magdesign.fields import cylinder_on_axis
 from magdesign.scene import Loads, loads_from_spec, outputs, scene_from_spec, simulate
@@ -24,6 +25,28 @@ def test_inductors_flag_each_slip():
     assert int(count_events(flags)) == len(slips) == 2
     for slip in slips:
         assert flags[slip - 1 : slip + 2].any()
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_stick_phases_after_a_pause_are_not_slips(seed):
+    """Four slips, each stick phase starting after a pause: with the inductors' own noise
+    (the spec's 1.4 mV) the 3-sigma band has a width, so only the four snaps are flagged.
+    Noiseless, a constant history's band has zero width and the start of every stick
+    phase (and rounding) is flagged too: 9 events, found by the seed-003 study."""
+    t = np.arange(1000) * 1e-3
+    shear = np.zeros_like(t)
+    starts = (0.05, 0.282, 0.514, 0.746)
+    for start in starts:  # 0.2 s ramp to 0.3 N, released in 2 ms, then a pause
+        shear += np.interp(t, [start, start + 0.2, start + 0.202], [0.0, 0.3, 0.0], left=0.0, right=0.0)
+    loads = Loads(np.full(t.size, 5.0), shear=np.stack([shear, 0 * t], -1), time=t)
+    scene = scene_from_spec(example("gmr_inductor"))
+    flags = np.asarray(simulate(scene, loads, key=jax.random.key(seed)).extras["slip"])
+    assert int(count_events(flags)) == len(starts)
+    for start in starts:
+        release = int(round((start + 0.2) * 1e3))
+        assert flags[release : release + 3].any()
+    noiseless = simulate(scene, loads, key=jax.random.key(seed), without=("noise",)).extras["slip"]
+    assert int(count_events(noiseless)) > len(starts)
 
 
 def test_dome_hall_outputs_match_closed_forms():
