@@ -5,6 +5,7 @@ through; they were checked when the concrete design was built.
 """
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 
@@ -32,7 +33,8 @@ def check_nonnegative(**values):
 
 
 def check_last_axis(name, array, size):
-    """Raise ValueError unless ``array`` has a last axis of length ``size``."""
-    shape = np.shape(array)
+    """Raise ValueError unless ``array`` has a last axis of length ``size`` (a nested list
+    may hold traced values, which numpy cannot read)."""
+    shape = jnp.asarray(array).shape if isinstance(array, (list, tuple)) else np.shape(array)
     if len(shape) == 0 or shape[-1] != size:
         raise ValueError(f"{name} must have shape (..., {size}), got shape {shape}")

@@ -19,9 +19,11 @@ k_spring the published spring coefficient (N/rad; 12.57 uN at 10 deg). A GMR ele
 
 Against seed 000 (checked, no unit or factor error found: charges in T m^2, field of a
 charge Q r / (4 pi r^3), force Q B / mu0, generalised force per ball radius in N/rad):
-with the example's geometry the model gives a spring coefficient of 7.0e-3 N/rad and a
-field sensitivity of 4.5 mT/deg, against the thesis's 7.2e-5 N/rad (12.57 uN at 10 deg)
-and 0.3 mT/deg (magnet soleplate). Both scale with the rod's induced magnetisation
+with the example's geometry the model gives a spring coefficient of 7.0e-3 N/rad against
+the thesis's 7.2e-5 N/rad (12.57 uN at 10 deg, its first design), and a GMR (in-plane)
+sensitivity of 4.5 mT/deg; the thesis's 0.3 mT/deg (magnet soleplate) is a different
+quantity, the difference of two Hall sensors' B_z, which studies/seed000_suspension.py
+computes like for like. Both scale with the rod's induced magnetisation
 (tip field / N_d), which is where the reduced model is weakest: N_d = 0.1 is a guess for
 the rod's aspect ratio, the plate's field falls along the 4 mm rod while the model takes
 it at the tip, and the thesis's FEM has a non-linear B-H curve (its Table 3.1 also lost

@@ -393,3 +393,12 @@ def test_bad_input():
         cylinder_on_axis(1e-3, radius=-R, height=D, remanence=J)
     with pytest.raises(ValueError, match="height"):
         cylinder_on_axis(1e-3, radius=R, height=0.0, remanence=J)
+
+
+def test_points_as_a_nested_list_holding_traced_values():
+    """A list of [x, y, z] whose entries are traced (vmap over z) is read like an array."""
+    field = jax.vmap(lambda z: cylinder([[0.0, 0.0, z]], radius=R, height=D, polarization=J))(jnp.array([2 * D, 3 * D]))
+    expected = cylinder(np.array([[0.0, 0.0, 2 * D], [0.0, 0.0, 3 * D]]), radius=R, height=D, polarization=J)
+    np.testing.assert_allclose(field[:, 0], expected, rtol=1e-14)
+    with pytest.raises(ValueError, match="points"):
+        cylinder([[0.0, 0.0]], radius=R, height=D, polarization=J)
