@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from study_runner import run_quick
+from study_runner import assert_opens_with
 
 NAME = "seed000_suspension"
 DEG = math.pi / 180
@@ -21,32 +21,8 @@ PUBLISHED = ["+-40 deg", "0.068 uN/deg", "0.215 uN/deg", "0.639 / 0.215 uN/deg",
              "12.57 uN", "0.131 mV per A/m"]
 
 
-@pytest.fixture(scope="module")
-def out(tmp_path_factory):
-    return tmp_path_factory.mktemp(NAME)
-
-
-@pytest.fixture(scope="module")
-def results(out):
-    return run_quick(NAME, out)
-
-
-def first_table(report):
-    """The rows of the report's first table, which must come before any other text."""
-    lines = [line for line in report.splitlines()[1:] if line.strip() and not line.startswith("*Quick mode")]
-    assert lines[0] == "| quantity | published | source | magdesign | difference | why |"
-    rows = []
-    for line in lines[2:]:
-        if not line.startswith("|"):
-            break
-        rows.append(line)
-    return rows
-
-
 def test_report_opens_with_every_published_number(results, out):
-    published = [row.split(" | ")[1] for row in first_table((out / "report.md").read_text())]
-    for value in PUBLISHED:
-        assert any(value in cell for cell in published), value
+    assert_opens_with(out, PUBLISHED)
 
 
 def test_compares_against_the_thesis_numbers(results):

@@ -2,7 +2,7 @@
 
 import pytest
 
-from study_runner import run_quick
+from study_runner import assert_opens_with
 
 NAME = "seed002_spin_valve_matrix"
 MT, UT = 1e-3, 1e-6
@@ -10,32 +10,8 @@ MT, UT = 1e-3, 1e-6
 PUBLISHED = ["-0.7 .. +0.7 mT", "1.985 / 2.015 V", "1.985 .. 2.015 V", "+-200 um, +-10 deg"]
 
 
-@pytest.fixture(scope="module")
-def out(tmp_path_factory):
-    return tmp_path_factory.mktemp(NAME)
-
-
-@pytest.fixture(scope="module")
-def results(out):
-    return run_quick(NAME, out)
-
-
-def first_table(report):
-    """The rows of the report's first table, which must come before any other text."""
-    lines = [line for line in report.splitlines()[1:] if line.strip() and not line.startswith("*Quick mode")]
-    assert lines[0] == "| quantity | published | source | magdesign | difference | why |"
-    rows = []
-    for line in lines[2:]:
-        if not line.startswith("|"):
-            break
-        rows.append(line)
-    return rows
-
-
 def test_report_opens_with_every_published_number(results, out):
-    published = [row.split(" | ")[1] for row in first_table((out / "report.md").read_text())]
-    for value in PUBLISHED:
-        assert any(value in cell for cell in published), value
+    assert_opens_with(out, PUBLISHED)
 
 
 def test_spin_valve_voltages_as_published(results):

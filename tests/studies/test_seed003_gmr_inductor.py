@@ -2,7 +2,7 @@
 
 import pytest
 
-from study_runner import run_quick
+from study_runner import assert_opens_with
 
 NAME = "seed003_gmr_inductor"
 DISPLACEMENT_ERROR = 0.05  # Sec. III-B, Figs. 8-9: "roughly 5 percent"
@@ -11,32 +11,8 @@ DETECTION_RATE = 0.90  # Sec. III-C
 PUBLISHED = ["roughly 5 %", "90 %"]
 
 
-@pytest.fixture(scope="module")
-def out(tmp_path_factory):
-    return tmp_path_factory.mktemp(NAME)
-
-
-@pytest.fixture(scope="module")
-def results(out):
-    return run_quick(NAME, out)
-
-
-def first_table(report):
-    """The rows of the report's first table, which must come before any other text."""
-    lines = [line for line in report.splitlines()[1:] if line.strip() and not line.startswith("*Quick mode")]
-    assert lines[0] == "| quantity | published | source | magdesign | difference | why |"
-    rows = []
-    for line in lines[2:]:
-        if not line.startswith("|"):
-            break
-        rows.append(line)
-    return rows
-
-
 def test_report_opens_with_every_published_number(results, out):
-    published = [row.split(" | ")[1] for row in first_table((out / "report.md").read_text())]
-    for value in PUBLISHED:
-        assert any(value in cell for cell in published), value
+    assert_opens_with(out, PUBLISHED)
 
 
 @pytest.mark.parametrize("method", ["model", "paper"])
