@@ -69,6 +69,15 @@ def safe_log(x, at_zero=0.0):
 DESIGN_RTOL = 1e-10
 # Default step tolerance in scaled variables: a converged step in a [0, 1] box.
 DESIGN_ATOL = 1e-13
+# Designs solved per compiled batch of a sweep: bounds its memory (the Reissner-level default
+# design takes about 1 kB per point) while keeping the per-call overhead small.
+DESIGN_CHUNK = 4096
+# Values that spread by less than this fraction of their size are one number up to rounding:
+# reports and pictures show the number, not its noise (sweep maps, tolerance histograms).
+ROUNDING_SPREAD = 1e-9
+# The most working memory (bytes, XLA's estimate for the compiled batch) a chunk may take;
+# a model that needs more per point gets smaller chunks.
+DESIGN_BATCH_MEMORY = 1 << 30
 # Sequential quadratic programming (design solver). The objective is scaled to a unit
 # gradient at the start and the constraints to their targets, so multipliers are O(1)-O(100):
 # - the cost per unit of an elastic slack of the QP (a target or limit row relaxed where

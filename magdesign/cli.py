@@ -4,6 +4,10 @@
     magdesign simulate SPEC.toml [--json]
     magdesign accuracy [--json] [--plot FILE]
     magdesign show SPEC.toml --plot FILE
+    magdesign tolerance SPEC.toml [--samples N] [--json] [--plot FILE] [--robust K] [--seed S] [--quiet]
+    magdesign sweep SPEC.toml --over KEY=LO:HI:N [--over ...] | --points CSV [--json] [--csv FILE]
+        [--plot FILE] [--fidelity LEVEL] [--quiet] [--devices N]
+        [--coordinator HOST:PORT --num-processes N --process-id I | --distributed]
 
 Exit codes: 0 done (solve: solved), 1 internal error (a bug: one line; ``--debug`` shows
 the traceback), 2 bad spec or arguments (one line naming the key), 3 solve not successful
@@ -15,6 +19,7 @@ Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax; see
 """
 
 import argparse
+import csv
 import importlib.metadata
 import json
 import math
@@ -24,16 +29,20 @@ import warnings
 from pathlib import Path
 
 import jax
+import numpy as np
 
 from magdesign import accuracy
 from magdesign.design import solve as solve_problem
-from magdesign.design.plot import plot_design
+from magdesign.design import sweep as sweep_problem
+from magdesign.design.plot import plot_design, plot_sweep
 from magdesign.design.report import format_quantity
-from magdesign.design.spec import default_spec, exact_levels, fidelity_levels, load_spec, problem_from_spec
+from magdesign.design import tolerance as tolerance_analysis
+from magdesign.design.spec import (default_spec, exact_levels, fidelity_levels, input_units, load_spec,
+                                   problem_from_spec)
 from magdesign.scene import (loads_from_spec, scene_from_spec, simulate, simulation_json, simulation_table,
                              with_parameters)
 from magdesign.scene.picture import plot_scene
-from magdesign.units import SpecError
+from magdesign.units import SpecError, parse, written_unit
 
 EXIT_INTERNAL = 1
 EXIT_BAD_SPEC = 2
@@ -100,9 +109,43 @@ def build_parser():
     accuracy_cmd.add_argument("--json", action="store_true", help="print a JSON list of rows instead of the table")
     accuracy_cmd.add_argument("--plot", metavar="FILE", help="write a PNG of error against time (log-log)")
 
+    sweep_cmd = add_parser("sweep", help="solve a design spec at every point of a grid (or list) of its inputs")
+    sweep_cmd.add_argument("spec", help="design spec (TOML)")
+    sweep_cmd.add_argument("--over", metavar="KEY=LO:HI:N", action="append", default=[],
+                           help="sweep KEY over N values from LO to HI (units as in specs, e.g. "
+                           "mechanics.outer_radius=6mm:10mm:5); repeat for a grid. KEY: a target (compliance), a limit "
+                           "bound (field_max.upper) or a scene parameter that is not a variable")
+    sweep_cmd.add_argument("--points", metavar="CSV", help="a CSV file of points instead of a grid: a header row of "
+                           "keys, then one row per point (quantities with units, or SI numbers)")
+    sweep_cmd.add_argument("--json", action="store_true", help="print one JSON object with every point")
+    sweep_cmd.add_argument("--csv", metavar="FILE", help="write every point (SI) to a CSV file")
+    sweep_cmd.add_argument("--plot", metavar="FILE", help="write a PNG: curves with their derivatives (one key), "
+                           "maps with contours (two keys)")
+    sweep_cmd.add_argument("--fidelity", help="one mechanics level for every point (e.g. reissner, axisymmetric); "
+                           "default: the spec's")
+    sweep_cmd.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep_cmd.add_argument("--devices", type=int, metavar="N",
+                           help="split this machine's CPU into N XLA devices and the points over them")
+    sweep_cmd.add_argument("--coordinator", metavar="HOST:PORT", help="jax.distributed: process 0's address")
+    sweep_cmd.add_argument("--num-processes", type=int, metavar="N", help="jax.distributed: how many processes")
+    sweep_cmd.add_argument("--process-id", type=int, metavar="I", help="jax.distributed: this process's index")
+    sweep_cmd.add_argument("--distributed", action="store_true",
+                           help="jax.distributed from the cluster's environment (SLURM, Open MPI, JAX_COORDINATOR_ADDRESS)")
+
     show = add_parser("show", help="draw the sensor in its axial plane with its field, at rest and at the largest load")
     show.add_argument("spec", help="scene or design spec (TOML); a design spec shows its start point")
     show.add_argument("--plot", metavar="FILE", required=True, help="the PNG to write")
+
+    tolerance = add_parser("tolerance", help="solve a design spec, then a Monte Carlo over its [design.tolerances]: "
+                           "each output's spread, the yield, the inputs that matter most")
+    tolerance.add_argument("spec", help="design spec (TOML) with a [design.tolerances] table")
+    tolerance.add_argument("--samples", type=int, default=100_000, metavar="N", help="Monte Carlo samples (default 100000)")
+    tolerance.add_argument("--json", action="store_true", help="print one JSON object instead of the tables")
+    tolerance.add_argument("--plot", metavar="FILE", help="write a PNG of each target and limit output's histogram with its bounds")
+    tolerance.add_argument("--robust", type=float, metavar="K", help="also solve with every limit held at K first-order "
+                           "sigmas of its output, and give that design's Monte Carlo beside the nominal one")
+    tolerance.add_argument("--seed", type=int, default=0, metavar="S", help="PRNG seed of the samples (default 0)")
+    tolerance.add_argument("--quiet", action="store_true", help="no progress bar or progress lines")
     return parser
 
 
@@ -191,6 +234,119 @@ def _difference(cheap, exact, cheap_levels, exact_levels_name):
     return "\n".join(lines)
 
 
+SWEEP_TABLE_ROWS = 200  # a longer sweep prints its summary only (see --csv / --json)
+
+
+def _start_devices(args):
+    """Set up the devices a sweep runs on, before JAX starts: ``--devices N`` host devices,
+    and jax.distributed for several processes (CPU collectives by gloo)."""
+    if args.devices is not None:
+        if args.devices < 1:
+            raise SpecError(f"--devices {args.devices}: expected at least 1")
+        jax.config.update("jax_num_cpu_devices", args.devices)
+    named = [args.coordinator, args.num_processes, args.process_id]
+    if args.distributed or any(value is not None for value in named) or os.environ.get("JAX_COORDINATOR_ADDRESS"):
+        if args.num_processes is not None and args.num_processes < 1:
+            raise SpecError(f"--num-processes {args.num_processes}: expected at least 1")
+        if args.process_id is not None and not 0 <= args.process_id < (args.num_processes or args.process_id + 1):
+            raise SpecError(f"--process-id {args.process_id}: expected 0 to --num-processes - 1")
+        jax.config.update("jax_cpu_collectives_implementation", "gloo")
+        jax.distributed.initialize(coordinator_address=args.coordinator, num_processes=args.num_processes,
+                                   process_id=args.process_id)
+
+
+def _sweep_points(args, units):
+    """({key: (k,) SI values}, {key: display unit}, grid) from --over or --points."""
+    if bool(args.over) == bool(args.points):
+        raise SpecError("sweep: give --over KEY=LO:HI:N (one or more) or --points CSV")
+
+    def unit_of(key, where):
+        if key not in units:
+            raise SpecError(f"{where}: unknown key {key!r}; expected one of {', '.join(units)}")
+        return units[key]
+
+    if args.points:
+        try:
+            with open(args.points, newline="") as file:
+                rows = [row for row in csv.reader(file) if any(cell.strip() for cell in row)]
+        except OSError as error:
+            raise SpecError(f"--points {args.points}: cannot read ({error.strerror})") from None
+        if len(rows) < 2:
+            raise SpecError(f"--points {args.points}: expected a header row of keys and at least one point")
+        keys = [key.strip() for key in rows[0]]
+        values = {key: [] for key in keys}
+        for number, row in enumerate(rows[1:], start=2):
+            if len(row) != len(keys):
+                raise SpecError(f"--points {args.points}: line {number} has {len(row)} cells, the header {len(keys)}")
+            for key, cell in zip(keys, row):
+                si, _ = unit_of(key, f"--points {args.points}")
+                text = cell.strip()
+                values[key].append(parse(float(text) if _is_number(text) else text, si, key=f"--points line {number} {key}"))
+        return values, {key: unit_of(key, "--points")[1] for key in keys}, False
+    values, shown = {}, {}
+    for item in args.over:
+        key, equals, rest = item.partition("=")
+        key = key.strip()
+        where = f"--over {item}"
+        parts = rest.split(":")
+        if not equals or len(parts) != 3:
+            raise SpecError(f"{where}: expected KEY=LO:HI:N, e.g. mechanics.outer_radius=6mm:10mm:5")
+        si, display = unit_of(key, where)
+        if key in values:
+            raise SpecError(f"{where}: {key} is swept twice")
+        low, high = (parse(float(t) if _is_number(t) else t.strip(), si, key=f"--over {key}") for t in parts[:2])
+        try:
+            count = int(parts[2])
+        except ValueError:
+            raise SpecError(f"{where}: N must be a whole number, got {parts[2]!r}") from None
+        if count < 1:
+            raise SpecError(f"{where}: N must be at least 1, got {count}")
+        if not low < high:
+            raise SpecError(f"{where}: LO must be below HI")
+        values[key] = np.linspace(low, high, count)
+        shown[key] = written_unit(parts[0].strip()) or display
+    return values, shown, True
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def run_sweep(args):
+    _start_devices(args)
+    spec = load_spec(args.spec)
+    if args.plot and args.points is None and len(args.over) > 2:
+        raise SpecError("--plot: a picture shows 1 or 2 swept keys (curves or maps)")
+    problem, scene = problem_from_spec(spec, fidelity=args.fidelity)
+    values, shown, grid = _sweep_points(args, input_units(spec, problem, scene))
+    if args.plot and len(values) > 2:
+        raise SpecError("--plot: a picture shows 1 or 2 swept keys (curves or maps)")
+    try:
+        result = sweep_problem(problem, values, grid=grid, progress=False if args.quiet or args.json else None,
+                               over_units={k: None if u == "1" else u for k, u in shown.items()})
+    except ValueError as error:
+        raise SpecError(str(error)) from None
+    if jax.process_index() != 0:  # every process holds the merged result; the first one writes it
+        return 0 if result.successful.all() else EXIT_NOT_SOLVED
+    if args.csv:
+        result.write_csv(args.csv)
+    if args.json:
+        print(json_text({"over": list(result.over), "shape": list(result.shape), "grid": grid,
+                         "status_counts": result.status_counts(), "seconds": result.seconds,
+                         "units": {k: v for k, v in result.units.items() if v}, "points": result.records()}))
+    else:
+        if result.status.size <= SWEEP_TABLE_ROWS:
+            print(result.table())
+        print(f"magdesign sweep: {result.summary()}" + (f"; every point written to {args.csv}" if args.csv else ""))
+    if args.plot:
+        plot_sweep(result, args.plot)
+    return 0 if result.successful.all() else EXIT_NOT_SOLVED
+
+
 def run_simulate(args):
     spec = load_spec(args.spec)
     scene, start = scene_at_start(spec)
@@ -210,6 +366,57 @@ def run_simulate(args):
             f"{name} = {value:.6g} {scene.output_units.get(name, '1').removeprefix('1')}".rstrip()
             for name, value in values.items() if math.isfinite(value)))
     return 0 if bool(result.converged.all()) else EXIT_NOT_SOLVED
+
+
+def run_tolerance(args):
+    if args.samples < 1:
+        raise SpecError(f"--samples: expected a positive number of samples, got {args.samples}")
+    if args.robust is not None and not (math.isfinite(args.robust) and args.robust > 0):
+        raise SpecError(f"--robust: expected a number of sigmas K > 0, got {args.robust:g}")
+    spec = load_spec(args.spec)
+    tp = tolerance_analysis.tolerance_problem_from_spec(spec)
+    levels = fidelity_levels(spec)
+    quiet = args.json or args.quiet
+
+    def note(message):
+        if not quiet:
+            print(f"magdesign tolerance: {message} ...", file=sys.stderr, flush=True)
+
+    def analyse(result, what):
+        if not result.successful:
+            print(f"magdesign tolerance: the {what} solve ended {result.status}: analysing its end point anyway",
+                  file=sys.stderr)
+        note(f"Monte Carlo of the {what} design, {args.samples} samples")
+        return tolerance_analysis.monte_carlo(tp, result.parameters, samples=args.samples, seed=args.seed,
+                                              progress=False if args.quiet else None)
+
+    note(f"solving at {levels}")
+    nominal = solve_problem(tp.problem)
+    runs = [("nominal", nominal, analyse(nominal, "nominal"))]
+    if args.robust is not None:
+        note(f"solving with every limit held at {args.robust:g} sigma (first order)")
+        robust = tolerance_analysis.robust_solve(tp, args.robust, start=nominal.parameters)
+        runs.append(("robust", robust, analyse(robust, "robust")))
+    if args.json:
+        document = {"status": nominal.status, "yield": runs[0][2].yield_fraction, "fidelity": levels,
+                    "tolerances": tolerance_analysis.describe(tp),
+                    "design": {**nominal.to_json(), "monte_carlo": runs[0][2].to_json()}, "robust": None}
+        if args.robust is not None:
+            document["robust"] = {"k": args.robust, **runs[1][1].to_json(), "monte_carlo": runs[1][2].to_json()}
+        print(json_text(document))
+    else:
+        print(f"tolerances:\n{tolerance_analysis.tolerance_lines(tp)}")
+        for name, result, carlo in runs:
+            held = f", every limit held at {args.robust:g} sigma (first order)" if name == "robust" else ""
+            print(f"\n{name} design ({levels}{held}):\n{result.table()}\n")
+            print(carlo.table())
+        if args.robust is not None:
+            print("\nyield: " + ", ".join(f"{name} {100 * carlo.yield_fraction:.4g} % ({result.status})"
+                                           for name, result, carlo in runs))
+    if args.plot:
+        tolerance_analysis.plot_tolerance(runs[0][2], args.plot, robust=runs[1][2] if len(runs) > 1 else None,
+                                          title=Path(args.spec).name)
+    return 0 if all(result.successful for _, result, _ in runs) else EXIT_NOT_SOLVED
 
 
 def run_accuracy(args):
@@ -236,20 +443,20 @@ def json_text(value) -> str:
     return json.dumps(finite(value), allow_nan=False)
 
 
-def check_plot_path(path):
-    """SpecError unless ``path`` is a PNG file that can be written (checked before any
-    solve, so that a long run does not end in an error): a name ending in .png in an
+def check_output_path(path, option="--plot", suffix=".png"):
+    """SpecError unless ``path`` is a file that can be written (checked before any solve,
+    so that a long run does not end in an error): a name ending in ``suffix`` in an
     existing, writable folder, and not a folder itself."""
     target = Path(path)
     folder = target.parent
     if target.is_dir():
-        raise SpecError(f"--plot {path}: a folder; give the path of the .png file to write")
-    if target.suffix.lower() != ".png":
-        raise SpecError(f"--plot {path}: give a file name ending in .png")
+        raise SpecError(f"{option} {path}: a folder; give the path of the {suffix} file to write")
+    if target.suffix.lower() != suffix:
+        raise SpecError(f"{option} {path}: give a file name ending in {suffix}")
     if not folder.is_dir():
-        raise SpecError(f"--plot {path}: no folder {folder}")
+        raise SpecError(f"{option} {path}: no folder {folder}")
     if not os.access(folder, os.W_OK) or (target.exists() and not os.access(target, os.W_OK)):
-        raise SpecError(f"--plot {path}: cannot write there")
+        raise SpecError(f"{option} {path}: cannot write there")
 
 
 def _fail(args, code, kind, message):
@@ -269,10 +476,13 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     use_compilation_cache()
     warnings.showwarning = _show_warning
-    command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy, "show": run_show}[args.command]
+    command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy, "show": run_show,
+               "sweep": run_sweep, "tolerance": run_tolerance}[args.command]
     try:
         if getattr(args, "plot", None):
-            check_plot_path(args.plot)
+            check_output_path(args.plot)
+        if getattr(args, "csv", None):
+            check_output_path(args.csv, "--csv", ".csv")
         return command(args)
     except SpecError as error:
         return _fail(args, EXIT_BAD_SPEC, "bad_spec", str(error))

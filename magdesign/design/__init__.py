@@ -10,4 +10,4 @@ from magdesign.design.report import DesignStatus as DesignStatus
 from magdesign.design.report import DesignSweep as DesignSweep
 from magdesign.design.solve import multistart as multistart
 from magdesign.design.solve import solve as solve
-from magdesign.design.solve import sweep as sweep
+from magdesign.design.sweep import sweep as sweep

@@ -158,6 +158,10 @@ class Problem(eqx.Module):
             inside the model converged and 0 where one did not (a scene's
             "mechanics_converged"); a solution where it is below 1/2 gets the status
             "mechanics_not_converged", never "successful".
+        fixed: {name: value (SI)} of model inputs held fixed, passed to the model beside
+            the variables: the solver reports the implicit derivatives of the optimum with
+            respect to them, and a sweep varies them (e.g. a scene's
+            "mechanics.outer_radius").
     """
 
     model: Callable
@@ -168,8 +172,10 @@ class Problem(eqx.Module):
     report: tuple[str, ...] = eqx.field(static=True)
     report_units: tuple[tuple[str, str | None], ...] = eqx.field(static=True)
     converged: str | None = eqx.field(static=True)
+    fixed_names: tuple[str, ...] = eqx.field(static=True)
+    fixed_values: tuple[Float[Array, ""], ...]
 
-    def __init__(self, model, variables, targets=(), limits=(), objective=None, report=(), converged=None):
+    def __init__(self, model, variables, targets=(), limits=(), objective=None, report=(), converged=None, fixed=None):
         self.model = model
         self.variables = tuple(variables)
         self.targets = tuple(targets)
@@ -179,6 +185,12 @@ class Problem(eqx.Module):
         self.report = tuple(report_units)
         self.report_units = tuple(report_units.items())
         self.converged = converged
+        fixed = dict(fixed or {})
+        self.fixed_names = tuple(fixed)
+        self.fixed_values = tuple(_scalar(f"fixed.{name}", value) for name, value in fixed.items())
+        taken = sorted(set(self.fixed_names) & {v.name for v in self.variables})
+        if taken:
+            raise ValueError(f"fixed: {taken[0]!r} is a variable; a model input is either free or fixed")
         if not self.variables:
             raise ValueError("variables: a problem needs at least one free variable")
         for kind, names in (

@@ -1,5 +1,7 @@
 """Results of the design solver: a JSON-ready record and a readable table."""
 
+import csv
+
 import equinox as eqx
 import numpy as np
 
@@ -26,10 +28,11 @@ STATUS_NAMES = tuple(DesignStatus._name_to_item)
 
 
 def _keys(problem):
-    """Names of the theta entries: each target's output, then "output.side" per limit row."""
+    """Names of the theta entries: each target's output, "output.side" per limit row, then
+    each fixed input's name."""
     return [t.output for t in problem.targets] + [
         f"{problem.limits[i].output}.{side}" for i, side in problem.limit_rows
-    ]
+    ] + list(problem.fixed_names)
 
 
 def format_quantity(value: float, unit: str | None) -> str:
@@ -50,7 +53,8 @@ class DesignResult(eqx.Module):
         limits: {output: {"upper" and/or "lower": bound, "achieved": value, "active": bool}}.
         active_bounds: {variable: "lower" | "upper"} for variables held on a bound.
         derivatives: {key: {variable: d parameter / d key}}, key a target's output (d/d its
-            value) or "output.upper" / "output.lower" for an active limit's bound.
+            value), "output.upper" / "output.lower" for an active limit's bound, or a
+            fixed input's name (:class:`Problem` ``fixed``).
         violated: names of the targets and limits not met.
         outputs: the model outputs named by the problem (targets, limits, objective, report).
         steps: solver steps, all phases; seconds: wall time of the solve.
@@ -98,16 +102,17 @@ class DesignResult(eqx.Module):
             entry[side] = theta[n_targets + k]
             entry["active"] = entry["active"] or active_rows[k]
         keys = _keys(problem)
+        rows = n_targets + len(problem.limit_rows)
         derivatives = {
             key: {name: derivatives[j][column] for j, name in enumerate(names)}
             for column, key in enumerate(keys)
-            if column < n_targets or active_rows[column - n_targets]
+            if column < n_targets or column >= rows or active_rows[column - n_targets]
         }
         active_bounds = {
             name: ("lower" if at_lower[j] else "upper") for j, name in enumerate(names) if at_lower[j] or at_upper[j]
         }
         violated = tuple(
-            key for k, key in enumerate(keys) if (abs(residuals[k]) if k < n_targets else residuals[k]) > float(rtol)
+            key for k, key in enumerate(keys[:rows]) if (abs(residuals[k]) if k < n_targets else residuals[k]) > float(rtol)
         )
         units = {v.name: v.unit for v in problem.variables}
         units.update({t.output: t.unit for t in problem.targets})
@@ -185,56 +190,132 @@ class DesignResult(eqx.Module):
 
 
 class DesignSweep(eqx.Module):
-    """A batch of solved designs (numpy arrays with a leading (batch,) axis, SI).
+    """A grid or list of solved designs: numpy arrays of shape ``shape`` (a grid's axes in
+    the order of ``over``, or (points,)), SI.
 
     Attributes:
-        status: (batch,) status names, as in :class:`DesignResult`.
-        parameters: {variable: (batch,)}.
-        targets: {output: {"target": (batch,), "achieved": (batch,)}}.
-        limits: {output: {"achieved": (batch,), "active": (batch,) bool}}.
-        derivatives: {key: {variable: (batch,)}} for every target and limit row (0 where
-            a limit is inactive).
-        steps: (batch,); seconds: wall time of the whole batch.
+        over: {key: (shape) values}: the swept inputs (a target's output, "output.upper" /
+            "output.lower" of a limit, or a fixed scene parameter such as
+            "mechanics.outer_radius"); empty for a batch of starts.
+        status: (shape) status names, as in :class:`DesignResult`.
+        parameters: {variable: (shape)}.
+        targets: {output: {"target": (shape), "achieved": (shape)}}.
+        limits: {output: {"achieved": (shape), "active": (shape) bool}}.
+        outputs: {output: (shape)}: every output the problem names.
+        derivatives: {key: {variable: (shape)}}: implicit derivatives of the optimum with
+            respect to every target value, limit bound (0 where that limit is inactive) and
+            fixed input.
+        steps: (shape); seconds: wall time of the whole batch.
+        units: display units by name (None: SI), as in :class:`DesignResult`.
     """
 
+    over: dict
     status: np.ndarray
     parameters: dict
     targets: dict
     limits: dict
+    outputs: dict
     derivatives: dict
     steps: np.ndarray
     seconds: float
+    units: dict
 
     @classmethod
-    def from_core(cls, problem, solution, thetas, seconds):
+    def from_core(cls, problem, solution, thetas, seconds, over=None, shape=None, over_units=None):
+        """From the core's flat (points,) solution; ``shape`` (default (points,)) reshapes it;
+        ``over_units`` gives the swept keys' display units."""
         thetas = np.asarray(thetas)
+        shape = tuple(shape) if shape is not None else (thetas.shape[0],)
+        grid = lambda values: np.asarray(values).reshape(shape)  # noqa: E731
         names = [v.name for v in problem.variables]
-        n_targets = len(problem.targets)
+        outputs = {name: grid(solution.outputs[:, k]) for k, name in enumerate(problem.outputs)}
         limits = {}
         for k, (i, _) in enumerate(problem.limit_rows):
             output = problem.limits[i].output
-            entry = limits.setdefault(
-                output,
-                {"achieved": solution.outputs[:, problem.outputs.index(output)], "active": np.zeros(thetas.shape[0], bool)},
-            )
-            entry["active"] = entry["active"] | np.asarray(solution.active_limits[:, k])
+            entry = limits.setdefault(output, {"achieved": outputs[output], "active": np.zeros(shape, bool)})
+            entry["active"] = entry["active"] | grid(solution.active_limits[:, k])
+        units = {v.name: v.unit for v in problem.variables}
+        units.update({t.output: t.unit for t in problem.targets})
+        units.update({lim.output: lim.unit for lim in problem.limits})
+        units.update(problem.report_units)
+        units.update(over_units or {})
         return cls(
-            status=np.asarray(STATUS_NAMES)[np.asarray(solution.status)],
-            parameters={name: np.asarray(solution.x[:, j]) for j, name in enumerate(names)},
+            over={key: grid(values) for key, values in (over or {}).items()},
+            status=grid(np.asarray(STATUS_NAMES)[np.asarray(solution.status)]),
+            parameters={name: grid(solution.x[:, j]) for j, name in enumerate(names)},
             targets={
-                t.output: {"target": thetas[:, k], "achieved": solution.outputs[:, problem.outputs.index(t.output)]}
+                t.output: {"target": grid(thetas[:, k]), "achieved": outputs[t.output]}
                 for k, t in enumerate(problem.targets)
             },
             limits=limits,
+            outputs=outputs,
             derivatives={
-                key: {name: np.asarray(solution.derivatives[:, j, column]) for j, name in enumerate(names)}
+                key: {name: grid(solution.derivatives[:, j, column]) for j, name in enumerate(names)}
                 for column, key in enumerate(_keys(problem))
             },
-            steps=np.asarray(solution.steps),
+            steps=grid(solution.steps),
             seconds=float(seconds),
+            units=units,
         )
 
     @property
+    def shape(self) -> tuple[int, ...]:
+        return self.status.shape
+
+    @property
     def successful(self) -> np.ndarray:
-        """(batch,) bool: which designs solved."""
+        """(shape) bool: which designs solved."""
         return self.status == "successful"
+
+    def status_counts(self) -> dict:
+        """{status name: number of points}, most frequent first."""
+        names, counts = np.unique(self.status, return_counts=True)
+        return {str(name): int(count) for count, name in sorted(zip(counts, names), reverse=True)}
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """{column: (points,) values (SI)}, flattened in the grid's (C) order: the swept
+        inputs, status, parameters, outputs, steps, and each derivative as
+        "d(variable)/d(key)"."""
+        columns = {**self.over, "status": self.status, **self.parameters, **self.outputs, "steps": self.steps}
+        for key, entry in self.derivatives.items():
+            columns.update({f"d({name})/d({key})": values for name, values in entry.items()})
+        return {name: np.ravel(values) for name, values in columns.items()}
+
+    def records(self) -> list[dict]:
+        """One flat dict per point (SI), with the keys of :meth:`columns`."""
+        flat = {name: values.tolist() for name, values in self.columns().items()}
+        return [dict(zip(flat, row)) for row in zip(*flat.values())]
+
+    def write_csv(self, path, block: int = 10_000) -> None:
+        """Write :meth:`columns` to a CSV file (a header row, then one row per point, SI),
+        ``block`` rows at a time so that a sweep of millions of points needs little memory."""
+        columns = self.columns()
+        with open(path, "w", newline="") as file:
+            writer = csv.writer(file)
+            writer.writerow(columns)
+            for start in range(0, self.status.size, block):
+                writer.writerows(zip(*(values[start : start + block].tolist() for values in columns.values())))
+
+    def summary(self) -> str:
+        """One line: how many points, how many solved, and the others by status."""
+        total = self.status.size
+        failed = {name: count for name, count in self.status_counts().items() if name != "successful"}
+        line = f"{total} points, {total - sum(failed.values())} successful"
+        if failed:
+            line += f", {sum(failed.values())} not: " + ", ".join(f"{count} {name}" for name, count in failed.items())
+        return line + f" ({self.seconds:.3g} s)"
+
+    def table(self) -> str:
+        """A readable table: one row per point with the swept inputs, the status, the
+        parameters and the problem's outputs in their display units."""
+        columns = {**self.over, **self.parameters, **self.outputs}
+        names = list(columns)
+        header = names[: len(self.over)] + ["status"] + names[len(self.over):]
+        cells = [[f"{name} ({self.units.get(name)})" if self.units.get(name) else name for name in header]]
+        flat = {name: np.ravel(values) for name, values in columns.items()}
+        for index, status in enumerate(np.ravel(self.status)):
+            row = [f"{convert(flat[name][index], self.units.get(name)):.6g}" if self.units.get(name)
+                   else f"{flat[name][index]:.6g}" for name in names]
+            cells.append(row[: len(self.over)] + [str(status)] + row[len(self.over):])
+        widths = [max(len(row[i]) for row in cells) + 2 for i in range(len(header))]
+        return "\n".join("  " + "".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in cells)

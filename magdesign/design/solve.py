@@ -34,7 +34,10 @@ is one loop whose body evaluates the model's jet (values, Jacobian, Hessians) on
 point it tries, so XLA compiles one copy of the model for the search.
 """
 
+import contextlib
 import functools
+import os
+import sys
 import time
 
 import equinox as eqx
@@ -43,11 +46,16 @@ import jax.numpy as jnp
 import lineax as lx
 import numpy as np
 import optimistix as optx
-from jaxtyping import Array, ArrayLike, Bool, Float, Int
+from jax.experimental import multihost_utils
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
+from jaxtyping import Array, Bool, Float, Int
+from tqdm import tqdm
 
 from magdesign._numerics import (
     DESIGN_ACTIVE_MULTIPLIER,
     DESIGN_ATOL,
+    DESIGN_BATCH_MEMORY,
+    DESIGN_CHUNK,
     DESIGN_CURVATURE_TOL,
     DESIGN_ELASTIC,
     DESIGN_ESCAPES,
@@ -96,12 +104,14 @@ class CoreSolution(eqx.Module):
 def problem_arrays(problem: Problem, xp=jnp):
     """(lower, upper, scale, start, theta) of a problem as float64 arrays.
 
-    theta stacks the target values, then each limit row's bound (SI). ``xp`` is jnp
+    theta stacks the target values, then each limit row's bound, then the fixed inputs
+    (SI): everything the optimum has implicit derivatives with respect to. ``xp`` is jnp
     inside traced code and numpy outside, where it is much cheaper than eager jnp.
     """
     stack = lambda values: xp.stack([xp.asarray(v, xp.float64) for v in values]) if values else xp.zeros((0,))  # noqa: E731
     variables = problem.variables
     theta = [t.value for t in problem.targets] + [getattr(problem.limits[i], side) for i, side in problem.limit_rows]
+    theta += list(problem.fixed_values)
     return (
         stack([v.lower for v in variables]),
         stack([v.upper for v in variables]),
@@ -115,7 +125,9 @@ def _evaluate(problem: Problem, y, theta):
     """Model outputs, scaled constraints c (targets == 0, limit rows <= 0) and objective."""
     lower, _, scale, _, _ = problem_arrays(problem)
     x = lower + scale * y
-    outputs = problem.model({v.name: x[i] for i, v in enumerate(problem.variables)})
+    n_rows = len(problem.targets) + len(problem.limit_rows)
+    fixed = {name: theta[n_rows + j] for j, name in enumerate(problem.fixed_names)}
+    outputs = problem.model({v.name: x[i] for i, v in enumerate(problem.variables)} | fixed)
     missing = [name for name in problem.outputs if name not in outputs]
     if missing:
         raise ValueError(f"{missing[0]}: not an output of the model (outputs: {sorted(outputs)})")
@@ -553,7 +565,7 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     ):
         status = DesignStatus.where(failed, item, status)
     del result  # its verdict is the residual's, checked above against our own tolerance
-    m = theta.shape[0]  # without _evaluate's row that never binds
+    m = len(problem.targets) + len(problem.limit_rows)  # without _evaluate's row that never binds
     return CoreSolution(
         x=lower + scale * y,
         multipliers=jnp.where(kept, multipliers, multipliers_start)[:m],
@@ -578,8 +590,9 @@ def _packed(problem, y0, theta, settings):
 def _unpack(problem, packed):
     """CoreSolution of numpy arrays from :func:`_packed`'s vector(s) (leading batch axes kept)."""
     n, m, k = len(problem.variables), len(problem.targets) + len(problem.limit_rows), len(problem.outputs)
+    p = m + len(problem.fixed_names)
     sizes = {"x": n, "multipliers": m, "outputs": k, "residuals": m, "active_limits": m - len(problem.targets),
-             "at_lower": n, "at_upper": n, "derivatives": n * m, "status": 1, "steps": 1}
+             "at_lower": n, "at_upper": n, "derivatives": n * p, "status": 1, "steps": 1}
     parts, start = {}, 0
     for name, size in sizes.items():
         parts[name] = packed[..., start : start + size]
@@ -593,7 +606,7 @@ def _unpack(problem, packed):
         active_limits=parts["active_limits"] > 0.5,
         at_lower=parts["at_lower"] > 0.5,
         at_upper=parts["at_upper"] > 0.5,
-        derivatives=parts["derivatives"].reshape(*batch, n, m),
+        derivatives=parts["derivatives"].reshape(*batch, n, p),
         status=parts["status"][..., 0].astype(int),
         steps=parts["steps"][..., 0].astype(int),
     )
@@ -631,7 +644,7 @@ def _run(problem, y0, theta, settings, *, batched=False):
 
 
 @functools.lru_cache(maxsize=16)
-def _settings(rtol, atol, max_steps):
+def settings_of(rtol, atol, max_steps):
     if not max_steps >= 1:
         raise ValueError(f"max_steps must be at least 1, got {max_steps!r}")
     for name, value in (("rtol", rtol), ("atol", atol)):
@@ -685,7 +698,7 @@ def solve(
         derivatives of the parameters with respect to the target values and active limit
         bounds.
     """
-    settings = _settings(rtol, atol, max_steps)
+    settings = settings_of(rtol, atol, max_steps)
     arrays = problem_arrays(problem, np)
     y0, theta = _start(problem, start, arrays), arrays[4]
     began = time.perf_counter()
@@ -694,42 +707,95 @@ def solve(
     return DesignResult.from_core(problem, _unpack(problem, packed), theta, seconds, settings.rtol)
 
 
-def _solve_batch(problem, y0, theta, settings):
+def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
+    """Solve ``problem`` from each start y0 (points, n) for each theta (points, p): the
+    flat :class:`CoreSolution` of numpy arrays and the wall time (s).
+
+    The points go in chunks of at most ``chunk`` (default DESIGN_CHUNK), so that memory
+    stays bounded, each chunk split over every local device (``jax.sharding``); under
+    ``jax.distributed`` (more than one process) each process solves its share of the
+    points and every process gets the whole result. ``progress``: True, False, or None
+    (a bar when stderr is a terminal and the batch takes more than a second).
+    """
     began = time.perf_counter()
-    packed = _run(problem, y0, theta, settings, batched=True)
+    count = thetas.shape[0]
+    processes, index = jax.process_count(), jax.process_index()
+    share = -(-count // processes)
+    mine = slice(index * share, min((index + 1) * share, count))
+    y0, thetas = np.asarray(y0, np.float64)[mine], np.asarray(thetas, np.float64)[mine]
+    devices = jax.local_devices()
+    # equal chunks, each a multiple of the device count: one compiled shape, little padding
+    # (a batch that fits one chunk is padded to a power of two, so that sweeps of nearby
+    # sizes share one compiled program)
+    limit = chunk or DESIGN_CHUNK
+    size = min(1 << max(share - 1, 0).bit_length(), limit) if share <= limit else -(-share // -(-share // limit))
+    size = -(-size // len(devices)) * len(devices)
+    sharding = NamedSharding(Mesh(np.array(devices), ("points",)), PartitionSpec("points")) if len(devices) > 1 else None
+    key, arrays = _split((problem, settings))
+    run, size = _batch_program(key, arrays, size, y0.shape[1], thetas.shape[1], sharding)
+    packed = []
+    bar = tqdm(total=share, unit="design", delay=1.0, disable=None if progress is None else not progress,
+               file=sys.stderr, leave=False) if index == 0 else None
+    for start in range(0, max(share, 1), size):
+        part = [_padded(a[start : start + size], size) for a in (y0, thetas)]
+        if sharding is not None:
+            part = [jax.device_put(a, sharding) for a in part]
+        packed.append(np.asarray(run(arrays, *part))[: max(0, min(size, y0.shape[0] - start))])
+        if bar is not None:
+            bar.update(packed[-1].shape[0])
+    if bar is not None:
+        bar.close()
+    packed = np.concatenate(packed)
+    if processes > 1:
+        with _stdout_to_stderr():  # gloo announces its connections on stdout (fd 1)
+            packed = multihost_utils.process_allgather(_padded(packed, share), tiled=True)[:count]
     return _unpack(problem, packed), time.perf_counter() - began
 
 
-def sweep(
-    problem: Problem,
-    target: str,
-    values: Float[ArrayLike, " batch"],
-    *,
-    start: dict | None = None,
-    rtol: float = DESIGN_RTOL,
-    atol: float = DESIGN_ATOL,
-    max_steps: int = 100,
-) -> DesignSweep:
-    """Solve ``problem`` for each value (SI) of one target, in one vmapped batch.
+_PROGRAMS = {}  # (structure, chunk size, columns, devices) -> compiled batch program
 
-    Args:
-        problem: the design problem; ``target`` names one of its targets (its output).
-        values: (batch,) the target values to solve for (SI).
-        start, rtol, atol, max_steps: as in :func:`solve`; the same start for every value.
 
-    Returns:
-        A :class:`DesignSweep` of (batch,) arrays, with the implicit derivatives.
-    """
-    names = [t.output for t in problem.targets]
-    if target not in names:
-        raise ValueError(f"target: {target!r} is not a target of the problem (targets: {names})")
-    values = np.atleast_1d(np.asarray(values, np.float64))
-    arrays = problem_arrays(problem, np)
-    thetas = np.repeat(arrays[4][None, :], values.shape[0], axis=0)
-    thetas[:, names.index(target)] = values
-    y0 = np.broadcast_to(_start(problem, start, arrays), (values.shape[0], len(problem.variables)))
-    solution, seconds = _solve_batch(problem, y0, thetas, _settings(rtol, atol, max_steps))
-    return DesignSweep.from_core(problem, solution, thetas, seconds)
+def _batch_program(key, arrays, size, n, p, sharding):
+    """(compiled program, chunk size) for chunks of ``size`` points, or of fewer where its
+    working memory would pass DESIGN_BATCH_MEMORY (an axisymmetric dome's solve takes
+    about 100 MB per point): read from XLA's memory analysis of the compiled program."""
+    devices = 1 if sharding is None else sharding.mesh.size
+    while True:
+        entry = (key, size, n, p, devices)
+        if entry not in _PROGRAMS:
+            if len(_PROGRAMS) >= 64:
+                _PROGRAMS.clear()
+            shape = lambda columns: jax.ShapeDtypeStruct((size, columns), jnp.float64, sharding=sharding)  # noqa: E731
+            _PROGRAMS[entry] = _compiled(key, True).lower(arrays, shape(n), shape(p)).compile()
+        program = _PROGRAMS[entry]
+        memory = program.memory_analysis()
+        need = None if memory is None else memory.temp_size_in_bytes * devices
+        if need is None or need <= DESIGN_BATCH_MEMORY or size <= devices:
+            return program, size
+        size = max(devices, int(size * DESIGN_BATCH_MEMORY / need) // devices * devices)
+
+
+@contextlib.contextmanager
+def _stdout_to_stderr():
+    """File descriptor 1 sent to stderr for a while: for messages of C++ libraries that
+    would break a reader of stdout (a JSON document)."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    os.dup2(2, 1)
+    try:
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def _padded(array, size):
+    """``array`` (k, ...) cut or padded to (size, ...) by repeating its last row (a zero
+    row where it is empty)."""
+    if array.shape[0] >= size:
+        return array[:size]
+    last = array[-1:] if array.shape[0] else np.zeros((1, *array.shape[1:]), array.dtype)
+    return np.concatenate([array, np.repeat(last, size - array.shape[0], axis=0)])
 
 
 def multistart(
@@ -752,5 +818,5 @@ def multistart(
     y0 = _start(problem, starts, arrays)
     y0 = np.broadcast_to(y0, (next(iter(batch))[0], len(problem.variables)))
     thetas = np.repeat(arrays[4][None, :], y0.shape[0], axis=0)
-    solution, seconds = _solve_batch(problem, y0, thetas, _settings(rtol, atol, max_steps))
+    solution, seconds = solve_batch(problem, y0, thetas, settings_of(rtol, atol, max_steps))
     return DesignSweep.from_core(problem, solution, thetas, seconds)

@@ -27,6 +27,7 @@ import jax
 from jaxtyping import Array
 
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable
+from magdesign.design.sweep import sweepable
 from magdesign.scene import (MECHANICS_CONVERGED, AbstractScene, Loads, MagnetScene, loads_from_spec, outputs,
                              parameters, scene_from_spec, with_parameters)
 from magdesign.scene._spec import PARAMETER_UNITS, check_domain, check_keys, sub_table
@@ -36,7 +37,7 @@ from magdesign.units import SpecError, echo, parse, written_unit
 
 _VARIABLE_KEYS = ("lower", "upper", "start", "scale")
 _LIMIT_KEYS = ("lower", "upper", "scale")
-_TARGET_KEYS = ("value", "scale")
+_TARGET_KEYS = ("value", "scale", "tolerance")  # tolerance: read by magdesign.design.tolerance
 _SENSES = {"maximize": "max", "minimize": "min"}
 
 
@@ -93,6 +94,24 @@ def _parameter_unit(spec, name):
     value = spec.get(table, {}).get(key) if table else spec.get(key)
     si = PARAMETER_UNITS.get(name, "1")
     return si, written_unit(value) or si
+
+
+def input_units(spec: dict, problem: Problem, scene: AbstractScene) -> dict[str, tuple[str, str]]:
+    """{key: (SI unit, unit to show it in)} of every input a sweep of the spec's problem can
+    vary (:func:`magdesign.design.sweep.sweepable`): a target's value and a limit's bound in
+    their output's unit (as the spec writes them), a scene parameter in the unit the scene
+    spec writes it; "1" for a dimensionless one."""
+    units = {}
+    for key in sweepable(problem):
+        output, _, side = key.rpartition(".")
+        target = next((t for t in problem.targets if t.output == key), None)
+        limit = next((lim for lim in problem.limits if lim.output == output and side in lim.sides), None)
+        if target is not None or limit is not None:
+            si = scene.output_units.get(target.output if target is not None else output, "1")
+            units[key] = (si, (target or limit).unit or si)
+        else:
+            units[key] = _parameter_unit(spec, key)
+    return units
 
 
 def _si_unit(output_units, name):
@@ -201,7 +220,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         if not press > 0.0:
             raise SpecError("load.normal: a design needs a sweep that presses harder than its first point (the "
                             f"press it is designed for); its largest normal load is {press:g} N above its first")
-    check_keys("design", design, ("variables", "targets", "limits", "objective", "report"))
+    check_keys("design", design, ("variables", "targets", "limits", "objective", "report", "tolerances"))
     known_parameters = parameters(scene)
     output_units = scene.output_units
     known_outputs = set(jax.eval_shape(outputs, scene, loads))
@@ -243,7 +262,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
             entry = value
         else:
             entry = {"value": value}
-        numbers = {key: parse(entry[key], unit, key=f"{where}.{key}") for key in entry}
+        numbers = {key: parse(entry[key], unit, key=f"{where}.{key}") for key in entry if key != "tolerance"}
         if numbers["value"] == 0.0 and "scale" not in numbers:
             raise SpecError(f"{where}: a target of 0 needs a scale to judge 'met' by; write it as "
                             f"{{ value = {entry['value']!r}, scale = \"...\" }} with a quantity in {unit}")

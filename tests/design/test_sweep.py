@@ -1,0 +1,217 @@
+"""Sweeps: grids and lists of full design solves, against closed forms, single solves and
+finite differences; the `magdesign sweep` command, its bad input, devices and processes."""
+
+import csv
+import json
+import socket
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from magdesign.cli import main
+from magdesign.design import Problem, Target, Variable, solve, sweep
+from magdesign.design.spec import default_spec, load_spec, problem_from_spec
+
+mm, mT = 1e-3, 1e-3
+
+# A small scene whose optimum has a closed form: the gap at which the on-axis field of a
+# cylinder (radius R, height H, remanence Br) at the sensor is the wanted B.
+CHEAP = """
+[magnet]
+shape = "cylinder"
+radius = "1.5 mm"
+height = "1 mm"
+remanence = "1.2 T"
+fidelity = "axis"
+
+[mechanics]
+model = "layer"
+thickness = "5 mm"
+contact_area = "100 mm^2"
+fidelity = "hooke"
+material = "linear"
+youngs_modulus = "200 kPa"
+poisson_ratio = 0.45
+
+[sensor]
+model = "hall3d"
+preset = "AK8963"
+
+[geometry]
+gap = "5 mm"
+
+[load]
+normal = ["0 N", "1 N"]
+points = 3
+
+[design.variables]
+"geometry.gap" = { lower = "1 mm", upper = "20 mm", start = "5 mm" }
+
+[design.targets]
+field_rest = "5 mT"
+"""
+
+
+def on_axis_field(gap, remanence, radius=1.5 * mm, height=1.0 * mm):
+    """Bz on a cylinder's axis at ``gap`` from its face (the textbook closed form)."""
+    far = gap + height
+    return remanence / 2 * (far / np.hypot(far, radius) - gap / np.hypot(gap, radius))
+
+
+def gap_for(field, remanence):
+    return brentq(lambda g: on_axis_field(g, remanence) - field, 0.1 * mm, 50 * mm, xtol=1e-16, rtol=1e-15)
+
+
+@pytest.fixture(scope="module")
+def cheap_spec(tmp_path_factory):
+    path = tmp_path_factory.mktemp("sweep") / "cheap.toml"
+    path.write_text(CHEAP)
+    return path
+
+
+def product_problem():
+    """x * a = y: the optimum x = y / a, dx/dy = 1 / a, dx/da = -y / a^2."""
+    return Problem(lambda v: {"y": v["x"] * v["a"]}, [Variable("x", 0.01, 100.0, 1.0)], targets=[Target("y", 2.0)],
+                   fixed={"a": 4.0})
+
+
+def test_grid_shape_and_closed_form_with_derivatives():
+    targets, factors = np.array([1.0, 2.0, 3.0]), np.array([0.5, 2.0, 4.0, 8.0])
+    result = sweep(product_problem(), {"y": targets, "a": factors})
+    assert result.shape == (3, 4) and result.successful.all()
+    y, a = np.meshgrid(targets, factors, indexing="ij")
+    np.testing.assert_array_equal(result.over["y"], y)
+    np.testing.assert_array_equal(result.over["a"], a)
+    np.testing.assert_allclose(result.parameters["x"], y / a, rtol=1e-12)
+    np.testing.assert_allclose(result.derivatives["y"]["x"], 1 / a, rtol=1e-10)
+    np.testing.assert_allclose(result.derivatives["a"]["x"], -y / a**2, rtol=1e-10)
+
+
+def test_list_of_points_and_small_chunks_agree_with_one_batch():
+    points = {"y": np.linspace(0.5, 3.0, 7), "a": np.linspace(1.0, 7.0, 7)}
+    listed = sweep(product_problem(), points, grid=False)
+    assert listed.shape == (7,)
+    np.testing.assert_allclose(listed.parameters["x"], points["y"] / points["a"], rtol=1e-12)
+    chunked = sweep(product_problem(), points, grid=False, chunk=3)  # 3 + 3 + 1 padded to 3
+    np.testing.assert_array_equal(chunked.parameters["x"], listed.parameters["x"])
+    assert list(chunked.status) == list(listed.status)
+
+
+def test_bad_keys_name_the_key():
+    problem = product_problem()
+    with pytest.raises(ValueError, match="'x'|x: a variable"):
+        sweep(problem, {"x": [1.0]})
+    with pytest.raises(ValueError, match="nope"):
+        sweep(problem, {"nope": [1.0]})
+    with pytest.raises(ValueError, match="lengths"):
+        sweep(problem, {"y": [1.0, 2.0], "a": [1.0]}, grid=False)
+
+
+def test_scene_parameter_sweep_against_the_closed_form(cheap_spec):
+    problem, _ = problem_from_spec(load_spec(cheap_spec))
+    remanences = np.linspace(1.0, 1.4, 5)
+    result = sweep(problem, {"magnet.remanence": remanences, "field_rest": [3 * mT, 6 * mT]})
+    assert result.shape == (5, 2) and result.successful.all()
+    for i, br in enumerate(remanences):
+        for j, field in enumerate((3 * mT, 6 * mT)):
+            gap = gap_for(field, br)
+            assert result.parameters["geometry.gap"][i, j] == pytest.approx(gap, rel=1e-9)
+            # implicit derivative: d gap / d Br = -(dB/dBr) / (dB/dgap), by the closed form
+            step = 1e-9
+            dB_dgap = (on_axis_field(gap + step, br) - on_axis_field(gap - step, br)) / (2 * step)
+            expected = -(field / br) / dB_dgap
+            assert result.derivatives["magnet.remanence"]["geometry.gap"][i, j] == pytest.approx(expected, rel=1e-6)
+
+
+def test_default_design_over_the_dome_radius_matches_single_solves_and_finite_differences():
+    spec = default_spec()
+    problem, _ = problem_from_spec(spec)
+    radii = np.linspace(7.0, 9.0, 9) * mm
+    result = sweep(problem, {"mechanics.outer_radius": radii})
+    assert result.successful.all()
+    # one point against a single solve of the spec written with that radius
+    changed = {**spec, "mechanics": {**spec["mechanics"], "outer_radius": radii[2]}}
+    single = solve(problem_from_spec(changed)[0])
+    for name, value in single.parameters.items():
+        assert result.parameters[name][2] == pytest.approx(value, rel=1e-8)
+    # the implicit derivative against central differences along the sweep
+    thickness = result.parameters["mechanics.thickness"]
+    slope = (thickness[2:] - thickness[:-2]) / (radii[2:] - radii[:-2])
+    np.testing.assert_allclose(result.derivatives["mechanics.outer_radius"]["mechanics.thickness"][1:-1], slope, rtol=2e-3)
+
+
+def test_command_writes_every_point_and_counts_the_failures(cheap_spec, tmp_path, capsys):
+    table = tmp_path / "points.csv"
+    # 30 mT is out of reach of the weakest magnet at the smallest gap (1 mm: 6.1 mT): a point fails
+    assert on_axis_field(1 * mm, 0.05) < 30 * mT < on_axis_field(1 * mm, 0.4333)
+    code = main(["sweep", str(cheap_spec), "--over", "magnet.remanence=0.05T:1.2T:4", "--over", "field_rest=5mT:30mT:2",
+                 "--csv", str(table), "--plot", str(tmp_path / "map.png"), "--quiet"])
+    out = capsys.readouterr().out
+    with open(table) as file:
+        rows = list(csv.DictReader(file))
+    assert len(rows) == 8
+    failed = [row for row in rows if row["status"] != "successful"]
+    assert failed and code == 3
+    assert f"8 points, {8 - len(failed)} successful, {len(failed)} not" in out
+    for row in rows:
+        if row["status"] == "successful":
+            gap = gap_for(float(row["field_rest"]), float(row["magnet.remanence"]))
+            assert float(row["geometry.gap"]) == pytest.approx(gap, rel=1e-9)
+    assert (tmp_path / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_command_json_and_points_file(cheap_spec, tmp_path, capsys):
+    points = tmp_path / "points.csv"
+    points.write_text("magnet.remanence,field_rest\n1.0 T,4 mT\n1.3,0.004\n")
+    assert main(["sweep", str(cheap_spec), "--points", str(points), "--json"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert document["shape"] == [2] and document["grid"] is False
+    assert [p["magnet.remanence"] for p in document["points"]] == [1.0, 1.3]
+    for point in document["points"]:
+        assert point["geometry.gap"] == pytest.approx(gap_for(4 * mT, point["magnet.remanence"]), rel=1e-9)
+        assert "d(geometry.gap)/d(magnet.remanence)" in point
+
+
+@pytest.mark.parametrize(
+    "over, message",
+    [
+        ("nope=1:2:3", "unknown key 'nope'"),
+        ("magnet.remanence=1mm:2mm:3", "--over magnet.remanence"),
+        ("magnet.remanence=1T:1.2T:0", "N must be at least 1"),
+        ("magnet.remanence=1.2T:1T:3", "LO must be below HI"),
+        ("geometry.gap=1mm:2mm:3", "unknown key 'geometry.gap'"),  # a variable: not swept
+        ("magnet.remanence=1T:2T", "expected KEY=LO:HI:N"),
+    ],
+)
+def test_command_bad_input_is_one_line_exit_2(cheap_spec, capsys, over, message):
+    assert main(["sweep", str(cheap_spec), "--over", over]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err
+
+
+def _command(spec, *extra):
+    return [sys.executable, "-m", "magdesign", "sweep", str(spec), "--over", "magnet.remanence=1T:1.4T:5", "--json", *extra]
+
+
+def test_two_host_devices_and_two_processes_give_the_one_device_answer(cheap_spec):
+    one = json.loads(subprocess.run(_command(cheap_spec), capture_output=True, text=True, check=True).stdout)
+    two = json.loads(subprocess.run(_command(cheap_spec, "--devices", "2"), capture_output=True, text=True, check=True).stdout)
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    processes = [
+        subprocess.Popen(_command(cheap_spec, "--coordinator", f"127.0.0.1:{port}", "--num-processes", "2",
+                                  "--process-id", str(i)), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for i in range(2)
+    ]
+    outputs = [p.communicate(timeout=300) for p in processes]
+    assert [p.returncode for p in processes] == [0, 0], outputs[0][1][-500:] + outputs[1][1][-500:]
+    merged = json.loads(outputs[0][0])
+    assert outputs[1][0] == ""  # process 0 writes the merged result
+    gaps = [p["geometry.gap"] for p in one["points"]]
+    assert gaps == pytest.approx([gap_for(5 * mT, br) for br in np.linspace(1.0, 1.4, 5)], rel=1e-9)
+    assert [p["geometry.gap"] for p in two["points"]] == gaps
+    assert [p["geometry.gap"] for p in merged["points"]] == gaps
