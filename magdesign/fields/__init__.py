@@ -6,3 +6,4 @@ from magdesign.fields.film import film_magnitude as film_magnitude
 from magdesign.fields.cylinder import cylinder as cylinder
 from magdesign.fields.cylinder import cylinder_on_axis as cylinder_on_axis
 from magdesign.fields.dipole import dipole as dipole
+from magdesign.fields.cuboid import cuboid as cuboid
