@@ -177,6 +177,13 @@ DOME_LEVENBERG_START = 1e-6
 # rounding (1e-16 / 1e-6 = 1e-10) errors both far below the 1e-6 it is asked to recover.
 FD_CALIBRATION_STEP = 1e-6
 
+# Seed 000's moments level: the tilt step (rad) of its five-point central differences (the
+# spring coefficient and the field sensitivity at theta = 0). Truncation ~ step^4 times a
+# fifth / sixth tilt derivative: the GMR's field, 0.58 mm from the rod's tip, varies
+# fastest; at 0.02 rad its sensitivity was 1.7e-4 off, at 0.005 rad below 1e-6 (against
+# 0.0025 rad); rounding ~1e-15 / step^2 ~ 4e-11 for the spring coefficient.
+TILT_DIFFERENCE_STEP = 0.005
+
 
 # Smallest distance to a film's corner, as a fraction of the film's width: the field of a
 # finite film diverges logarithmically at its corners (where its face meets its side);

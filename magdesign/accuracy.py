@@ -21,6 +21,12 @@ The cases:
   discs of shape factor 0.25..2 (seed-004 Ecoflex, nu 0.49); one evaluation is one layer.
 - dome: secant compliance at 5 N of seed-001-like domes (R_o 8 mm, t = 1.5, 2, 2.5 mm),
   Reissner and the axisymmetric model at four meshes against the finest mesh.
+- soft sphere: the method of moments for a Ni-Fe sphere (mu_r 1000, diameter 2 mm) in a
+  uniform field, 4..16 cells across, against the exact M = 3 chi / (3 + chi) H0; error is
+  the mean M's relative error; one evaluation is one solve.
+- seed-000 pole: the spring coefficient of examples/pole_plate.toml's rod at 8..16 cells
+  along it (the example's 16 included) against 24 cells, and the reduced (charge) level;
+  one evaluation is the scene's three outputs (five solves).
 - default design: the parameters of the default design solved at each dome level, against
   the axisymmetric level (default mesh); error is the largest parameter move in metres (unit "m"), time is one solve.
 """
@@ -46,6 +52,8 @@ REPEATS = 7
 DOME_MESHES = ((1, 12), (2, 12), (2, 16), (4, 32))
 AREA_POINTS_PER_SIDE = (1, 2, 4, 8)
 AREA_REFERENCE_POINTS = 16
+SOFT_SPHERE_CELLS = (4, 8, 12, 16)
+POLE_CELLS = (24, 8, 12, 16)  # the first is the reference
 
 SEED001_MAGNET = dict(radius=1.5 * mm, height=1 * mm, polarization=1.17)
 SEED002_MAGNET = dict(radius=0.5 * mm, height=1 * mm, polarization=1.3)
@@ -200,6 +208,42 @@ def measure_dome():
     ]
 
 
+def measure_soft():
+    """The method of moments: a soft sphere against its exact answer, and seed 000's pole
+    at its cell counts against the finest."""
+    import tomllib
+    from pathlib import Path
+
+    import equinox as eqx
+
+    from magdesign.fields import soft
+    from magdesign.scene import scene_from_spec
+    from magdesign.units import MU0
+
+    rows = []
+    field = jnp.array([0.0, 0.0, 1e-3])
+    exact = 3.0 * 999.0 / 1002.0 * float(field[2]) / MU0
+    solve_soft = jax.jit(soft.magnetization)
+    for cells in SOFT_SPHERE_CELLS:
+        body = soft.soft_body("sphere", 2 * mm, cells=cells, permeability=1000.0)
+        external = jnp.broadcast_to(field, (len(body.index), 3))
+        error = abs(float(jnp.mean(solve_soft(body, external)[:, 2])) / exact - 1)
+        rows.append(Row("soft sphere (moments)", f"{cells} cells across", error, _warm_seconds(solve_soft, body, external),
+                        "relative", "one solve"))
+    spec = tomllib.loads((Path(__file__).resolve().parents[1] / "examples" / "pole_plate.toml").read_text())
+    outputs = eqx.filter_jit(lambda scene: scene.outputs(None)["spring_coefficient"])
+    levels = [(f"moments {n} cells", dict(cells=n)) for n in POLE_CELLS] + [("reduced", dict(fidelity="reduced", demagnetizing_factor=0.1))]
+    values, seconds = {}, {}
+    for name, pole in levels:
+        table = {k: v for k, v in spec["pole"].items() if not (pole.get("fidelity") and k in ("fidelity", "permeability", "cells"))}
+        scene = scene_from_spec({**spec, "pole": table | pole})
+        values[name], seconds[name] = float(outputs(scene)), _warm_seconds(outputs, scene)
+    reference = values[levels[0][0]]
+    for name, _ in levels:
+        rows.append(Row("seed-000 pole spring", name, abs(values[name] / reference - 1), seconds[name], "relative", "one scene's outputs"))
+    return rows
+
+
 def measure_default_design():
     """The decision: how far the default design moves between dome levels, and its cost."""
     solved = {}
@@ -228,6 +272,7 @@ MEASUREMENTS = (
     ("sensor area averaging", measure_area_averaging),
     ("elastomer layer", measure_layer),
     ("dome compliance", measure_dome),
+    ("soft magnetics", measure_soft),
     ("default design", measure_default_design),
 )
 

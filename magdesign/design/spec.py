@@ -161,25 +161,28 @@ def _with_guards(limits, guards):
     return list(merged.values())
 
 
-# Models with cheaper levels: (table, key, model) -> (name in a report, the spec's default
-# level, {cheap level: the exact level that confirms it}). A cylinder's "axis" level is exact
-# where a scene may use it (every sensor on the axis), so only "dipole" needs confirming.
+# Models with cheaper levels: (table, key, model) -> (name in a report, the table holding
+# its fidelity, the spec's default level, {cheap level: the exact level that confirms it}).
+# A cylinder's "axis" level is exact where a scene may use it (every sensor on the axis),
+# so only "dipole" needs confirming. A reduced pole is not confirmed at the moments level:
+# its spec has no permeability to confirm with.
 _LEVELS = {
-    ("mechanics", "model", "dome"): ("dome", "reissner", {"reissner": "axisymmetric"}),
-    ("mechanics", "model", "layer"): ("layer", "hooke", {}),
-    ("magnet", "shape", "cylinder"): ("field", "exact", {"dipole": "exact"}),
+    ("mechanics", "model", "dome"): ("dome", "mechanics", "reissner", {"reissner": "axisymmetric"}),
+    ("mechanics", "model", "layer"): ("layer", "mechanics", "hooke", {}),
+    ("magnet", "shape", "cylinder"): ("field", "magnet", "exact", {"dipole": "exact"}),
+    ("magnet", "shape", "plate"): ("pole", "pole", "reduced", {}),
 }
 
 
 def _leveled(spec):
     """(table, report name, level now, most exact level) of each such model in the spec."""
-    for (table, key, model), (name, default, exact) in _LEVELS.items():
+    for (table, key, model), (name, level_table, default, exact) in _LEVELS.items():
         entry = spec.get(table)
         if isinstance(entry, dict) and entry.get(key) == model:
-            level = entry.get("fidelity", default)
+            level = (spec.get(level_table) or {}).get("fidelity", default)
             # a small-strain (linear) dome has no finite-strain level to be confirmed by
             confirmable = not (name == "dome" and entry.get("material") == "linear")
-            yield table, name, level, exact.get(level, level) if confirmable else level
+            yield level_table, name, level, exact.get(level, level) if confirmable else level
 
 
 def fidelity_levels(spec: dict) -> str:

@@ -7,3 +7,4 @@ from magdesign.fields.cylinder import cylinder as cylinder
 from magdesign.fields.cylinder import cylinder_on_axis as cylinder_on_axis
 from magdesign.fields.dipole import dipole as dipole
 from magdesign.fields.cuboid import cuboid as cuboid
+from magdesign.fields.cuboid import cuboid_tensor as cuboid_tensor

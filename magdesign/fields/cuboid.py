@@ -311,6 +311,38 @@ def _unit_tensor(q, h):
     return jnp.where(far[..., None, None], _far(q_far, h), near)
 
 
+def cuboid_tensor(
+    points: Float[ArrayLike, "... 3"],
+    *,
+    dimension: Float[ArrayLike, "... 3"],
+) -> Float[Array, "... 3 3"]:
+    """The cuboid's field tensor T (dimensionless): B = T J at ``points`` (m, magnet
+    frame) for a uniform polarization J, shape (..., 3, 3) of ``points`` and
+    ``dimension`` (m, full sides) broadcast. T is symmetric; inside the block T = 1 - S
+    (B = mu0 H + J), outside T = -S. One tensor serves every direction of J (the method
+    of moments' cells use it). Accuracy and conventions as :func:`cuboid`.
+    """
+    check_last_axis("points", points, 3)
+    check_last_axis("dimension", dimension, 3)
+    check_positive(dimension=dimension)
+    points = float_array(points)
+    half = jnp.asarray(0.5 * jnp.asarray(dimension), dtype=points.dtype)
+    shape = jnp.broadcast_shapes(points.shape, half.shape)
+    points, half = (jnp.broadcast_to(v, shape) for v in (points, half))
+    # Dimensionless: lengths in half diagonals. Axes permuted so that the shortest side
+    # is the third (the one whose corners are paired in closed form).
+    scale = jnp.sqrt(jnp.sum(half * half, -1, keepdims=True))
+    # order: the middle side along u (integrated for rods), the longest along v.
+    order = jnp.argsort(-half, axis=-1)[..., jnp.array([1, 0, 2])]
+    q = jnp.take_along_axis(points / scale, order, -1)
+    h = jnp.take_along_axis(half / scale, order, -1)
+    permuted = _unit_tensor(q, h)
+    # back to x, y, z: T[i, j] = permuted[inverse[i], inverse[j]]
+    inverse = jnp.argsort(order, axis=-1)
+    rows = jnp.take_along_axis(permuted, inverse[..., :, None], -2)
+    return jnp.take_along_axis(rows, inverse[..., None, :], -1)
+
+
 def cuboid(
     points: Float[ArrayLike, "... 3"],
     *,
@@ -342,23 +374,7 @@ def cuboid(
     mean of its inside and outside limits; on an edge or a corner (where the field
     diverges logarithmically) the value is about that at 1e-15 half diagonals from it.
     """
-    check_last_axis("points", points, 3)
-    check_last_axis("dimension", dimension, 3)
     check_last_axis("polarization", polarization, 3)
-    check_positive(dimension=dimension)
-    points = float_array(points)
-    dimension = jnp.asarray(dimension, dtype=points.dtype)
-    polarization = jnp.asarray(polarization, dtype=points.dtype)
-    shape = jnp.broadcast_shapes(points.shape, dimension.shape, polarization.shape)
-    points, half, polarization = (jnp.broadcast_to(v, shape) for v in (points, 0.5 * dimension, polarization))
-    # Dimensionless: lengths in half diagonals. Axes permuted so that the shortest side
-    # is the third (the one whose corners are paired in closed form).
-    scale = jnp.sqrt(jnp.sum(half * half, -1, keepdims=True))
-    # order: the middle side along u (integrated for rods), the longest along v.
-    order = jnp.argsort(-half, axis=-1)[..., jnp.array([1, 0, 2])]
-    inverse = jnp.argsort(order, axis=-1)
-    q = jnp.take_along_axis(points / scale, order, -1)
-    h = jnp.take_along_axis(half / scale, order, -1)
-    j = jnp.take_along_axis(polarization, order, -1)
-    field = jnp.einsum("...ij,...j->...i", _unit_tensor(q, h), j)
-    return jnp.take_along_axis(field, inverse, -1)
+    tensor = cuboid_tensor(points, dimension=dimension)
+    polarization = jnp.asarray(polarization, dtype=tensor.dtype)
+    return jnp.einsum("...ij,...j->...i", tensor, polarization)

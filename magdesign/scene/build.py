@@ -26,12 +26,13 @@ from magdesign.scene.film_scene import FilmScene
 from magdesign.scene.loads import loads_from_spec
 from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadout
 from magdesign.scene.mechanics import Dome, Layer
+from magdesign.fields.soft import soft_body
 from magdesign.scene.pole_scene import PoleScene
-from magdesign.scene.pose import Magnet, grid_positions
+from magdesign.scene.pose import Magnet, SoftPart, grid_positions
 from magdesign.transducers import SpinValve, ak8963, inesc_spin_valve, mlx90393, panasonic_meander
 from magdesign.units import SpecError, echo, parse, uT
 
-TABLES = ("scene", "magnet", "mechanics", "sensor", "geometry", "load", "inductors", "pole")
+TABLES = ("scene", "magnet", "mechanics", "sensor", "geometry", "load", "inductors", "pole", "soft")
 HALL_PRESETS = {"AK8963": ak8963, "MLX90393": mlx90393}
 VALVE_PRESETS = {"INESC": inesc_spin_valve, "PANASONIC": panasonic_meander}
 # NVE AA003-02 (seed 003), from NVE's AA-series catalogue: a 5 kOhm bridge, sensitivity
@@ -185,30 +186,60 @@ def _optional_vector(table, key, unit):
     return None if value is None else jnp.asarray(value)
 
 
+def _posed_tables(raw, key, moves):
+    """Each table of a ``[[key]]`` array: (its name, Table, centre (3,) (m, scene frame),
+    angles (3,) (rad), moves); ``moves`` the default of its ``moves`` flag. The Table is
+    checked for unknown keys when the caller has read it."""
+    if not isinstance(raw, list) or not all(isinstance(item, dict) for item in raw):
+        raise SpecError(f"{key}: expected [[{key}]] tables, got {echo(raw)}")
+    for index, item in enumerate(raw):
+        name = f"{key}[{index}]"
+        table = Table({name: item}, name)
+        flag = table._get("moves", moves)
+        if not isinstance(flag, bool):
+            raise SpecError(f"{name}.moves: expected true or false, got {echo(flag)}")
+        centre = jnp.asarray(table.quantities("position", "m", length=3))
+        angles = jnp.asarray(table.quantities("rotation", "rad", length=3, default=[0.0, 0.0, 0.0]))
+        yield name, table, centre, angles, flag
+        table.done()
+
+
 def _extra_magnets(magnet):
     """[[magnet.extra]]: further cylinders, each at its centre (scene frame) and rotation."""
-    raw = magnet._get("extra", [])
-    if not isinstance(raw, list) or not all(isinstance(item, dict) for item in raw):
-        raise SpecError(f"magnet.extra: expected [[magnet.extra]] tables, got {echo(raw)}")
-    magnets = []
-    for index, item in enumerate(raw):
-        name = f"magnet.extra[{index}]"
-        table = Table({name: item}, name)
-        moves = table._get("moves", True)
-        if not isinstance(moves, bool):
-            raise SpecError(f"{name}.moves: expected true or false, got {echo(moves)}")
-        magnets.append(
-            Magnet(
-                radius=jnp.asarray(table.quantity("radius", "m")),
-                height=jnp.asarray(table.quantity("height", "m")),
-                polarization=jnp.asarray(table.quantities("polarization", "T", length=3)),
-                centre=jnp.asarray(table.quantities("position", "m", length=3)),
-                angles=jnp.asarray(table.quantities("rotation", "rad", length=3, default=[0.0, 0.0, 0.0])),
-                moves=moves,
-            )
+    return tuple(
+        Magnet(
+            radius=jnp.asarray(table.quantity("radius", "m")),
+            height=jnp.asarray(table.quantity("height", "m")),
+            polarization=jnp.asarray(table.quantities("polarization", "T", length=3)),
+            centre=centre,
+            angles=angles,
+            moves=moves,
         )
-        table.done()
-    return tuple(magnets)
+        for _, table, centre, angles, moves in _posed_tables(magnet._get("extra", []), "magnet.extra", True)
+    )
+
+
+SOFT_SIZES = {"cuboid": 3, "cylinder": 2, "sphere": 1}  # lengths in a [[soft]] part's size
+SOFT_CELLS = 8
+
+
+def _soft_parts(spec):
+    """[[soft]]: linear soft-magnetic parts (method of moments), each at its centre (scene
+    frame) and rotation, fixed unless ``moves = true``."""
+    parts = []
+    for name, table, centre, angles, moves in _posed_tables(spec.get("soft", []), "soft", False):
+        shape = table.choice("shape", tuple(SOFT_SIZES))
+        count = SOFT_SIZES[shape]
+        size = table.quantities("size", "m", length=count) if count > 1 else [table.quantity("size", "m")]
+        if min(size) <= 0:
+            raise SpecError(f"{name}.size: expected lengths > 0 (m), got {echo(table._get('size', None))}")
+        permeability = table.quantity("permeability", "1")
+        if permeability <= 0:
+            raise SpecError(f"{name}.permeability: a relative permeability must be > 0, got {permeability:g}")
+        grid = soft_body(shape, size, cells=table.integer("cells", default=SOFT_CELLS), permeability=permeability).grid
+        parts.append(SoftPart(size=jnp.asarray(size), permeability=jnp.asarray(permeability), centre=centre,
+                              angles=angles, shape=shape, grid=grid, moves=moves))
+    return tuple(parts)
 
 
 def _cylinder_scene(spec, fidelity):
@@ -227,10 +258,14 @@ def _cylinder_scene(spec, fidelity):
     magnet_angles = _optional_vector(magnet, "rotation", "rad")
     extra = _extra_magnets(magnet)
     magnet.done()
+    parts = _soft_parts(spec)
     posed = [key for key, value in (("direction", direction), ("offset", offset), ("rotation", magnet_angles)) if value is not None]
     if field_fidelity == "axis" and (posed or extra):
         key = posed[0] if posed else "extra"
         raise SpecError(f"magnet.{key}: fidelity 'axis' holds for one axial magnet on the sensors' axis; use 'exact'")
+    if field_fidelity == "axis" and parts:
+        raise SpecError("magnet.fidelity: 'axis' is the magnet's field on its axis, and the [[soft]] parts read it "
+                        "off the axis; use 'exact'")
     mechanics = _mechanics(spec, fidelity)
     sensor = Table(spec, "sensor")
     model = sensor.choice("model", ("hall3d", "spin_valve", "gmr"))
@@ -293,6 +328,7 @@ def _cylinder_scene(spec, fidelity):
         offset=offset,
         angles=magnet_angles,
         extra=extra,
+        soft=parts,
     )
 
 
@@ -323,6 +359,12 @@ def _film_scene(spec, fidelity):
     )
 
 
+# The moments level's defaults: Ni-Fe (the thesis's secondary models, PHYSICS.md 1.3) and
+# the rod's cells along its length (the error/cost rows of `magdesign accuracy`).
+NIFE_PERMEABILITY = 1000.0
+POLE_CELLS = 16
+
+
 def _pole_scene(spec, fidelity):
     if fidelity is not None:
         raise SpecError(f"fidelity: the pole scene has one (reduced) mechanics model, got {fidelity!r}")
@@ -334,11 +376,21 @@ def _pole_scene(spec, fidelity):
     pole = Table(spec, "pole")
     ball_radius = pole.quantity("ball_radius", "m")
     diameter = pole.quantity("diameter", "m")
-    demag = pole.quantity("demagnetizing_factor", "1")
     length = pole.quantity("length", "m", default=2.0 * ball_radius)  # the rod through the whole ball
     if length > 2.0 * ball_radius:
         raise SpecError(f"pole.length: a {length * 1e3:g} mm rod does not fit in a ball of radius "
                         f"{ball_radius * 1e3:g} mm; expected at most its diameter")
+    level = pole.choice("fidelity", ("reduced", "moments"), default="reduced")
+    demag = permeability = rod_cells = None
+    if level == "reduced":
+        demag = jnp.asarray(pole.quantity("demagnetizing_factor", "1"))
+    else:
+        permeability = pole.quantity("permeability", "1", default=NIFE_PERMEABILITY)
+        if permeability <= 0:
+            raise SpecError(f"pole.permeability: a relative permeability must be > 0, got {permeability:g}")
+        cells = pole.integer("cells", default=POLE_CELLS)
+        rod_cells = soft_body("cylinder", [diameter, length], cells=cells, permeability=permeability).grid
+        permeability = jnp.asarray(permeability)
     pole.done()
     mechanics = Table(spec, "mechanics")
     mechanics.choice("model", ("tilt",))
@@ -361,7 +413,10 @@ def _pole_scene(spec, fidelity):
         ball_radius=jnp.asarray(ball_radius),
         pole_diameter=jnp.asarray(diameter),
         pole_length=jnp.asarray(length),
-        demagnetizing_factor=jnp.asarray(demag),
+        demagnetizing_factor=demag,
+        permeability=permeability,
+        fidelity=level,
+        rod_cells=rod_cells,
         spring=jnp.asarray(spring),
         sensor_offset=jnp.asarray(offset),
         sensor_height=jnp.asarray(sensor_height),
@@ -382,6 +437,8 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
     check_tables(spec, TABLES)
     points = loads_from_spec(spec).normal.shape[0]  # a bad [load] table is a bad spec, whatever runs next
     shape = Table(spec, "magnet").choice("shape", tuple(_SCENES))
+    if "soft" in spec and shape != "cylinder":
+        raise SpecError(f"soft: [[soft]] parts are magnetised by cylinder magnets (magnet.shape = 'cylinder'), not a {shape}")
     scene = _SCENES[shape](spec, fidelity)
     # a time derivative (the inductors' EMF) or a lag needs a time series
     needs_series = [name for name, wanted in (("the inductors' EMF", getattr(scene, "inductors", None) is not None),

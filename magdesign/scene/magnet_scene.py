@@ -7,7 +7,9 @@ Where the spec asks for it, the magnet's polarization has another ``direction`` 
 vector in its own frame: axial plus diametral parts), its pose an ``offset`` (m) from that
 centre and a rotation ``angles`` (rad, as a chip's, :mod:`magdesign.scene.pose`), and
 further magnets (``extra``, :class:`magdesign.scene.pose.Magnet`), carried with it or
-fixed, add their fields.
+fixed, add their fields. Soft-magnetic parts (``soft``, :class:`magdesign.scene.pose.SoftPart`,
+the method of moments) are magnetised by the magnets and add their own fields; each part is
+solved in the magnets' field alone (parts do not magnetise one another).
 Sensors sit at given positions (a reference sensor at the origin for seed 001; a
 4 x 2 matrix for seed 002; four GMR at several depths for seed 003). A press moves
 the magnet by -z towards them (seed 002's chips move towards a fixed magnet: the
@@ -45,7 +47,7 @@ from jaxtyping import Array, Float
 from magdesign.scene.core import MECHANICS_CONVERGED, AbstractScene
 from magdesign.scene.effects import AbstractEffect, effect_output_units, effect_outputs
 from magdesign.scene.mechanics import AbstractMechanics
-from magdesign.scene.pose import Magnet, posed_cylinder, rotation
+from magdesign.scene.pose import Magnet, SoftPart, posed_cylinder, rotation
 from magdesign.transducers import add_noise, emf, slip_flags, Hall3D, SpinValve
 
 class SpinValveReadout(eqx.Module):
@@ -102,6 +104,7 @@ class MagnetScene(AbstractScene):
     offset: Float[Array, "3"] | None = None
     angles: Float[Array, "3"] | None = None
     extra: tuple[Magnet, ...] = ()
+    soft: tuple[SoftPart, ...] = ()
 
     SOURCE_KEY = "magnet.remanence"
     OUTPUT_UNITS: ClassVar[dict[str, str]] = {
@@ -152,6 +155,13 @@ class MagnetScene(AbstractScene):
         return centre if self.offset is None else centre + self.offset
 
     def source_field(self, points, displacement):
+        field = self.magnets_field(points, displacement)
+        for part in self.soft:
+            field = field + part.field(points, displacement, lambda x: self.magnets_field(x, displacement))
+        return field
+
+    def magnets_field(self, points, displacement):
+        """The permanent magnets' flux density (T) at ``points`` (m, scene frame)."""
         polarization = self.remanence if self.direction is None else self.remanence * self.direction
         field = posed_cylinder(
             points,

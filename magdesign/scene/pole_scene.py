@@ -29,25 +29,40 @@ the rod's aspect ratio, the plate's field falls along the 4 mm rod while the mod
 it at the tip, and the thesis's FEM has a non-linear B-H curve (its Table 3.1 also lost
 its units). Treat absolute forces of this level as upper bounds; use it for trends.
 
+Method-of-moments level (``pole.fidelity = "moments"``, PHYSICS.md 1.3, issue 15): the
+rod is a linear soft body of relative permeability mu_r (``pole.permeability``) split
+into cuboid cells (:mod:`magdesign.fields.soft`, ``pole.cells`` along its length), its
+magnetisation solved self-consistently in the plate's field at every tilt, its own field
+added at the sensors, and the forces taken as derivatives of the magnetic co-energy
+W'(theta) with respect to the tilt and to a vertical shift (no demagnetising factor, no
+charge model). The plate is still taken as non-permeable (mu_r = 1, as the thesis's FEM
+sets it).
+
 Outputs (:meth:`PoleScene.outputs`), at theta = 0:
     field_sensitivity   dB_a / dtheta at the GMR (T/rad), through the scene's chain with
                         its field effects (B_a along the chip's sensitive axis)
     spring_coefficient  the model's own restoring stiffness -dF_t / dtheta, F_t the
                         generalised force along theta of the plate's pull on the
-                        rod's charges, per ball radius (N/rad); > 0 is restoring
+                        rod (its charges; at the moments level dW'/dtheta), per ball
+                        radius (N/rad); > 0 is restoring
     attraction          the plate's vertical pull on the rod (N, > 0 downwards)
+At the moments level the two tilt derivatives are five-point central differences of
+exact values over TILT_DIFFERENCE_STEP (their error O(step^4), below 1e-6 relative, far
+below the cells' discretisation error), and the attraction is -dW'/dz.
 """
 
 from typing import ClassVar
 
 import jax
+import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from magdesign.fields import cylinder
+from magdesign.fields import cylinder, soft
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.magnet_scene import SpinValveReadout
+from magdesign._numerics import TILT_DIFFERENCE_STEP
 from magdesign.units import MU0
 
 
@@ -56,8 +71,19 @@ def _charge_field(points, position, charge):
     return charge * r / (4.0 * jnp.pi * jnp.sum(r * r, axis=-1, keepdims=True) ** 1.5)
 
 
+def _turn_about_y(theta):
+    """Rotation (3, 3) taking the body's z axis to the rod's axis (-sin theta, 0, cos theta)."""
+    c, s = jnp.cos(theta), jnp.sin(theta)
+    zero, one = 0.0 * theta, 1.0 + 0.0 * theta
+    return jnp.array([[c, zero, -s], [zero, one, zero], [s, zero, c]])
+
+
 class PoleScene(AbstractScene):
-    """Seed 000's reduced model (see the module docstring); SI throughout."""
+    """Seed 000's suspension (see the module docstring); SI throughout.
+
+    ``fidelity`` (static) is "reduced" (charges, ``demagnetizing_factor``) or "moments"
+    (the rod a soft body of ``permeability``, ``rod_cells`` = its grid (n_x, n_y, n_z)).
+    """
 
     plate_radius: Float[Array, ""]
     plate_thickness: Float[Array, ""]
@@ -66,12 +92,15 @@ class PoleScene(AbstractScene):
     ball_radius: Float[Array, ""]
     pole_diameter: Float[Array, ""]
     pole_length: Float[Array, ""]
-    demagnetizing_factor: Float[Array, ""]
+    demagnetizing_factor: Float[Array, ""] | None
+    permeability: Float[Array, ""] | None
     spring: Float[Array, ""]
     sensor_offset: Float[Array, ""]
     sensor_height: Float[Array, ""]
     transducer: SpinValveReadout
     effects: tuple[AbstractEffect, ...]
+    fidelity: str = eqx.field(static=True, default="reduced")
+    rod_cells: tuple[int, int, int] | None = eqx.field(static=True, default=None)
 
     SOURCE_KEY = "magnet.remanence"
     reading_labels = ("V",)
@@ -88,7 +117,8 @@ class PoleScene(AbstractScene):
             "pole.ball_radius": lambda s: s.ball_radius,
             "pole.diameter": lambda s: s.pole_diameter,
             "pole.length": lambda s: s.pole_length,
-            "pole.demagnetizing_factor": lambda s: s.demagnetizing_factor,
+            **({"pole.demagnetizing_factor": lambda s: s.demagnetizing_factor} if self.fidelity == "reduced"
+               else {"pole.permeability": lambda s: s.permeability}),
             "mechanics.spring": lambda s: s.spring,
             "sensor.offset": lambda s: s.sensor_offset,
             "sensor.height": lambda s: s.sensor_height,
@@ -101,6 +131,36 @@ class PoleScene(AbstractScene):
     def tip(self, theta):
         """The rod's lower tip (3,) (m) at tilt ``theta`` (rad)."""
         return self.centre + self.ball_radius * jnp.stack([jnp.sin(theta), 0.0 * theta, -jnp.cos(theta)])
+
+    def tilt(self, displacement):
+        """The tilt (rad) that moves the rod's lower tip by ``displacement`` (3,) (m)."""
+        tip = self.tip(0.0) + displacement - self.centre
+        return jnp.arctan2(tip[0], -tip[2])
+
+    @property
+    def rod(self):
+        """The rod as a :class:`~magdesign.fields.soft.SoftBody` (moments level), in its
+        own frame: centre at the origin, axis along z."""
+        return soft.soft_body("cylinder", jnp.stack([self.pole_diameter, self.pole_length]),
+                              cells=self.rod_cells, permeability=self.permeability)
+
+    def _rod_pose(self, theta, shift):
+        """The rod's centre (3,) (m) and rotation (3, 3) at tilt ``theta`` (rad), moved by
+        ``shift`` (3,) (m)."""
+        turn = _turn_about_y(theta)
+        return self.tip(theta) + shift + 0.5 * self.pole_length * turn[:, 2], turn
+
+    def _rod_external(self, theta, shift):
+        """The plate's field at the rod's cells in the rod's frame (N, 3) (T)."""
+        rod = self.rod
+        centre, turn = self._rod_pose(theta, shift)
+        return self.plate_field(centre + rod.centres @ turn.T) @ turn
+
+    def coenergy(self, theta, shift=None):
+        """The rod's magnetic co-energy W' (J) in the plate's field at tilt ``theta`` (rad),
+        moved by ``shift`` (3,) (m) (moments level)."""
+        shift = jnp.zeros(3) if shift is None else shift
+        return soft.coenergy(self.rod, self._rod_external(theta, shift))
 
     def plate_field(self, points):
         centre = jnp.array([0.0, 0.0, -0.5]) * self.plate_thickness
@@ -131,6 +191,13 @@ class PoleScene(AbstractScene):
         return jax.vmap(self.tip)(theta) - self.tip(0.0), jnp.ones(theta.shape, bool)
 
     def source_field(self, points, displacement):
+        if self.fidelity == "moments":
+            theta = self.tilt(displacement)
+            rod = self.rod
+            centre, turn = self._rod_pose(theta, jnp.zeros(3))
+            magnetization = soft.magnetization(rod, self._rod_external(theta, jnp.zeros(3)))
+            own = soft.field(rod, magnetization, (points - centre) @ turn) @ turn.T
+            return self.plate_field(points) + own
         # one plate-field evaluation for the points and the rod's tip (one compiled kernel)
         tip = self.tip(0.0) + displacement
         flat = points.reshape(-1, 3)
@@ -147,7 +214,10 @@ class PoleScene(AbstractScene):
     def tangential_force(self, theta):
         """The plate's pull on the rod's charges at tilt ``theta`` (rad) as a generalised
         force along theta, per ball radius (N): sum F_i . dp_i/dtheta / r_b (the torque
-        about the ball's centre over r_b). Negative for theta > 0 where it restores."""
+        about the ball's centre over r_b); at the moments level dW'/dtheta / r_b. Negative
+        for theta > 0 where it restores."""
+        if self.fidelity == "moments":
+            return jax.grad(self.coenergy)(theta) / self.ball_radius
 
         def ends(angle):
             return self.charges(self.tip(angle) - self.tip(0.0))[0]
@@ -162,10 +232,28 @@ class PoleScene(AbstractScene):
             displacement = (self.tip(theta) - self.tip(0.0))[None]
             return chain(self, displacement, without=STATIC_WITHOUT).chip_field[0, 0, 0]
 
-        positions, charges = self.charges(jnp.zeros(3))
-        pull = charges[:, None] * self.plate_field(positions) / MU0
+        if self.fidelity == "moments":
+            # Five-point central differences over the tilt of exact values (the co-energy
+            # and the field): the exact second derivative of the plate's cylinder kernel
+            # costs ~95 s to compile; these need its values only. Truncation O(step^4).
+            angles = TILT_DIFFERENCE_STEP * jnp.arange(-2.0, 3.0)
+            energy, field = jax.vmap(self.coenergy)(angles), jax.vmap(field_a)(angles)
+            first = jnp.array([1.0, -8.0, 0.0, 8.0, -1.0]) / (12.0 * TILT_DIFFERENCE_STEP)
+            second = jnp.array([-1.0, 16.0, -30.0, 16.0, -1.0]) / (12.0 * TILT_DIFFERENCE_STEP**2)
+            return {
+                "field_sensitivity": first @ field,
+                "spring_coefficient": -(second @ energy) / self.ball_radius,
+                "attraction": self.attraction(),
+            }
         return {
             "field_sensitivity": jax.grad(field_a)(0.0),
             "spring_coefficient": -jax.grad(self.tangential_force)(0.0),
-            "attraction": -jnp.sum(pull[:, 2]),
+            "attraction": self.attraction(),
         }
+
+    def attraction(self):
+        """The plate's vertical pull on the rod at rest (N, > 0 downwards)."""
+        if self.fidelity == "moments":
+            return jax.grad(lambda dz: self.coenergy(0.0, jnp.array([0.0, 0.0, -1.0]) * dz))(0.0)
+        positions, charges = self.charges(jnp.zeros(3))
+        return -jnp.sum(charges * self.plate_field(positions)[:, 2]) / MU0

@@ -15,7 +15,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from magdesign.fields import cylinder
+from magdesign.fields import cylinder, soft
 from magdesign.transducers import rotation_matrix, to_chip
 
 
@@ -67,6 +67,38 @@ class Magnet(eqx.Module):
             points, centre=centre, angles=self.angles, radius=self.radius, height=self.height,
             polarization=self.polarization, fidelity=fidelity,
         )
+
+
+class SoftPart(eqx.Module):
+    """A linear soft-magnetic part of a scene (``[[soft]]``; :mod:`magdesign.fields.soft`):
+    its ``shape`` (static) and ``size`` (m, as :func:`~magdesign.fields.soft.soft_body`),
+    relative ``permeability``, ``centre`` (3,) (m, scene frame, at rest), ``angles`` (3,)
+    (rad, as a magnet's), ``grid`` (static) its cells along x, y, z; ``moves`` (static):
+    carried by the load with the magnet, or fixed in the scene."""
+
+    size: Float[Array, "..."]
+    permeability: Float[Array, ""]
+    centre: Float[Array, "3"]
+    angles: Float[Array, "3"]
+    shape: str = eqx.field(static=True)
+    grid: tuple[int, int, int] = eqx.field(static=True)
+    moves: bool = eqx.field(static=True, default=False)
+
+    @property
+    def body(self) -> soft.SoftBody:
+        return soft.soft_body(self.shape, self.size, cells=self.grid, permeability=self.permeability)
+
+    def field(self, points, displacement, magnets):
+        """The part's own flux density (T, scene frame) at ``points`` (m, scene frame), with
+        the load's ``displacement`` (m), magnetised by ``magnets``: a function from points
+        (..., 3) (m, scene frame) to the permanent magnets' B (T) there."""
+        body = self.body
+        centre = self.centre + displacement if self.moves else self.centre
+        matrix = rotation(self.angles)  # v_body = matrix v_scene
+        external = to_chip(matrix, magnets(centre + body.centres @ matrix))
+        magnetization = soft.magnetization(body, external)
+        own = soft.field(body, magnetization, to_chip(matrix, jnp.asarray(points) - centre))
+        return jnp.einsum("ji,...j->...i", matrix, own)
 
 
 def grid_positions(shape: tuple[int, int], pitch) -> Float[Array, "s 3"]:

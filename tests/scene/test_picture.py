@@ -6,17 +6,19 @@ import numpy as np
 import pytest
 
 from magdesign.scene import loads_from_spec, scene_from_spec
-from magdesign.scene.picture import GRID_POINTS, MM, plot_scene
+from magdesign.scene.picture import GRID_POINTS, MM, SOFT_GRID_POINTS, plot_scene
 from scene_helpers import example
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
 def _drawn(axis):
-    """The grid (x, z) (m) and |B| (T) of a panel."""
-    x = np.linspace(*axis.get_xlim(), GRID_POINTS) / MM
-    z = np.linspace(*axis.get_ylim(), GRID_POINTS) / MM
-    magnitude = np.asarray(axis.collections[0].get_array()).reshape(GRID_POINTS, GRID_POINTS)
+    """The grid (x, z) (m) and |B| (T) of a panel (GRID_POINTS per side, or SOFT_GRID_POINTS)."""
+    values = np.asarray(axis.collections[0].get_array())
+    grid = GRID_POINTS if values.size == GRID_POINTS**2 else SOFT_GRID_POINTS
+    x = np.linspace(*axis.get_xlim(), grid) / MM
+    z = np.linspace(*axis.get_ylim(), grid) / MM
+    magnitude = values.reshape(grid, grid)
     return x, z, magnitude
 
 

@@ -1,5 +1,6 @@
-"""studies/seed000_suspension.py in quick mode: its numbers against the thesis's (seed 000),
-and its verdicts against the published values and tolerances stated here."""
+"""studies/seed000_suspension.py in quick mode: its numbers at the method-of-moments level
+(the example's 16 cells) and the reduced level against the thesis's (seed 000), and its
+verdicts against the published values and tolerances stated here."""
 
 import math
 
@@ -10,15 +11,31 @@ from study_runner import assert_opens_with
 
 NAME = "seed000_suspension"
 DEG = math.pi / 180
-UN_PER_DEG = 1e-6 / DEG
-# Seed 000 (master thesis): Table 3.1 (unit read as uN/deg), abstract / Sec. 3.2.2, 3.2.4, 4.3
+UN, MT = 1e-6, 1e-3
+UN_PER_DEG = UN / DEG
+# Seed 000 (master thesis): Table 3.1 (unit read as uN/deg), abstract / Sec. 3.1.1, 3.2.2, 3.2.4, 4.3
 K_PM_FULL, K_PM_HALF = 0.068 * UN_PER_DEG, 0.215 * UN_PER_DEG
 LINEAR_RANGE = 40 * DEG
-SENS_PM = 0.3e-3 / DEG
+SENS_PM = 0.3 * MT / DEG
+INITIAL_FORCE, AIM_FORCE = 12.57 * UN, 1 * UN
 GMR_VOLTS_PER_AM = 0.131e-3
-# every published number issue 12 lists for this sensor, as the first table prints it
+# every published number issue 12 lists for this sensor, and the initial model's design rule
+# (issue 15), as the first table prints it
 PUBLISHED = ["+-40 deg", "0.068 uN/deg", "0.215 uN/deg", "0.639 / 0.215 uN/deg", "0.3 mT/deg", "2 mT/deg",
-             "12.57 uN", "0.131 mV per A/m"]
+             "12.57 uN", "1 uN", "0.131 mV per A/m"]
+# Regression values of the moments level with the example's 16 cells (this study and the
+# library's own outputs agree on them; full mode's 32-cell reference differs by a few per
+# cent, its convergence table): k, pull, Hall pair, GMR B_x. Tolerance 1e-3 relative: the
+# linear solve and the kernels, not the discretisation.
+MOMENTS_16 = {"spring_coefficient": 4.814e-3, "attraction": 2.699e-3, "hall_pair_sensitivity": 7.141e-2,
+              "gmr_field_sensitivity": 7.398e-2}
+REGRESSION = 1e-3
+# Known gaps, labelled as such (the report's "known gap"): the moments level's k is ~1.2e3
+# times Table 3.1 read as uN/deg, its Hall pair ~4 times the thesis's. A band of a factor 2.5
+# either way around each: a change of model that moves them out of it must update the report.
+K_GAP = (1236 / 2.5, 1236 * 2.5)
+HALL_GAP = (4.15 / 2.5, 4.15 * 2.5)
+NIFE_SATURATION, FE_SATURATION = 0.8, 2.2  # T: the study's assumption, the thesis's Fe
 
 
 def test_report_opens_with_every_published_number(results, out):
@@ -31,6 +48,8 @@ def test_compares_against_the_thesis_numbers(results):
     assert published["k_pm_half"] == pytest.approx(K_PM_HALF)
     assert published["linear_range"] == pytest.approx(LINEAR_RANGE)
     assert published["sensitivity_pm"] == pytest.approx(SENS_PM)
+    assert published["initial_force"] == pytest.approx(INITIAL_FORCE)
+    assert published["aim_force"] == pytest.approx(AIM_FORCE)
 
 
 def test_gmr_preset_reads_the_published_sensitivity(results):
@@ -38,25 +57,72 @@ def test_gmr_preset_reads_the_published_sensitivity(results):
     assert results["within_tolerance"]["gmr"] is True
 
 
-def test_suspension_restores_over_the_published_operating_range(results):
-    """The thesis's +-40 deg: the reduced model's pull restores (F theta > 0) all the way."""
-    tilt, force = np.array(results["tilt"]), np.array(results["restoring_force"])
-    assert results["spring_coefficient"] > 0
+@pytest.mark.parametrize("level", ["moments", "reduced"])
+def test_suspension_restores_over_the_published_operating_range(results, level):
+    """The thesis's +-40 deg: the pull restores (F theta > 0) all the way, F is odd in theta,
+    and k (a central difference at 0) is the small-angle slope."""
+    tilt, force = np.array(results["tilt"]), np.array(results[level]["restoring_force"])
+    k = results[level]["spring_coefficient"]
+    assert k > 0
     inside = (np.abs(tilt) <= LINEAR_RANGE) & (tilt != 0)
     assert np.all(force[inside] * tilt[inside] > 0)
-    np.testing.assert_allclose(force, -force[::-1], rtol=1e-9, atol=1e-12 * np.abs(force).max())
+    np.testing.assert_allclose(force, -force[::-1], rtol=0, atol=1e-9 * np.abs(force).max())
+    # F at 1 deg is interpolated on the quick grid (2 deg steps): its curvature there is ~8e-4
+    assert results[level]["force_at_1deg"] == pytest.approx(k * DEG, rel=2e-3)
+
+
+def test_moments_level_reproduces_its_regression_values(results):
+    moments = results["moments"]
+    assert results["cells"] == 16
+    for key, value in MOMENTS_16.items():
+        assert moments[key] == pytest.approx(value, rel=REGRESSION), key
+
+
+def test_known_gaps_to_the_thesis_stay_known(results):
+    """Not agreement: the gaps the report labels as known, and the reduced level's claim
+    (its docstring) that its forces are upper bounds of the finer level's."""
+    moments, reduced = results["moments"], results["reduced"]
+    assert K_GAP[0] < moments["spring_coefficient"] / K_PM_FULL < K_GAP[1]
+    assert HALL_GAP[0] < abs(moments["hall_pair_sensitivity"]) / SENS_PM < HALL_GAP[1]
+    assert reduced["spring_coefficient"] > moments["spring_coefficient"]
+    assert reduced["attraction"] > moments["attraction"]
+    # the initial model's design rule (1 uN at 1 deg) is missed for every assumed magnet
+    assert all(level["force_at_1deg"] > AIM_FORCE for level in results["initial_model"]["levels"])
+
+
+def test_linear_materials_hold_where_the_report_uses_them(results):
+    """The rod stays below Ni-Fe's saturation at rest, the initial model's Fe below 2.2 T."""
+    assert results["moments"]["peak_polarization"] < NIFE_SATURATION
+    assert all(level["peak_polarization"] < FE_SATURATION for level in results["initial_model"]["levels"])
+
+
+def test_candidate_checks_are_computed_consistently(results):
+    """The numbers behind the report's 'where the gap could come from'."""
+    k = results["moments"]["spring_coefficient"]
+    for reading in results["unit_readings"]:
+        assert reading["moments_ratio"] == pytest.approx(k / reading["published"], rel=1e-12)
+    uN_per_deg = next(r for r in results["unit_readings"] if r["reading"] == "uN/deg")
+    assert uN_per_deg["published"] == pytest.approx(K_PM_FULL)
+    # the pull at rest outweighs the rod (7x), which Table 3.1 in uN/deg would not
+    pull = results["moments"]["attraction"]
+    assert pull > results["weight"] > K_PM_FULL * pull / k
+    # k rises with the pole's diameter and falls with the plate's radius (40 mm: still >10x Table 3.1)
+    by_diameter = [level["spring_coefficient"] for level in results["pole_diameters"]["levels"]]
+    by_plate = [level["spring_coefficient"] for level in results["plate_radii"]["levels"]]
+    assert np.all(np.diff(by_diameter) > 0) and np.all(np.diff(by_plate) < 0)
+    assert by_plate[-1] > 10 * K_PM_FULL
 
 
 def test_verdicts_follow_the_published_values_and_tolerances(results):
-    """No row may claim agreement that the published number and its tolerance do not give
-    (the reduced model is known to miss the FEM's absolute values by orders of magnitude)."""
+    """No row may claim agreement that the published number and its tolerance do not give."""
     factor, verdicts = results["tolerance"]["factor"], results["within_tolerance"]
     assert factor == 2.0 and results["tolerance"]["range"] == pytest.approx(5 * DEG)
     within = lambda value, published: 1 / factor <= abs(value / published) <= factor  # noqa: E731
-    k, k_half = results["spring_coefficient"], results["spring_coefficient_half"]
+    k, k_half = results["moments"]["spring_coefficient"], results["half_pole"]["spring_coefficient"]
     assert verdicts["k_pm_full"] is within(k, K_PM_FULL)
     assert verdicts["k_pm_half"] is within(k_half, K_PM_HALF)
     assert verdicts["k_half_over_full"] is within(k_half / k, K_PM_HALF / K_PM_FULL)
-    assert verdicts["sensitivity_pm"] is within(results["hall_pair_sensitivity"], SENS_PM)
-    assert verdicts["linear_range"] is (abs(results["linear_range"] - LINEAR_RANGE) <= 5 * DEG)
-    assert verdicts["sensitivity_nife"] is None and verdicts["k_nife"] is None
+    assert verdicts["sensitivity_pm"] is within(results["moments"]["hall_pair_sensitivity"], SENS_PM)
+    assert verdicts["linear_range"] is (abs(results["moments"]["linear_range"] - LINEAR_RANGE) <= 5 * DEG)
+    for key in ("sensitivity_nife", "k_nife", "gmr_field", "initial_force", "design_rule"):
+        assert verdicts[key] is None, key

@@ -1,0 +1,231 @@
+"""Linear soft-magnetic bodies by the method of moments (PHYSICS.md 1.3, issue 15).
+
+A soft body (its own frame: centre at the origin) is split into N equal cuboid cells on
+a regular grid, each of uniform magnetisation M_i (A/m). The field of a cell is exact
+(:func:`magdesign.fields.cuboid_tensor`: B = T J, J = mu0 M); requiring M = chi H at the
+cells' centres c_i (collocation) gives 3N linear equations
+
+    M_i = chi (H_ext(c_i) + sum_j (T(c_i - c_j) - delta_ij 1) M_j)
+    (1 - chi (T - 1)) M = chi H_ext,          chi = mu_r - 1,
+
+solved by LU (lineax). T depends on the cells' index differences only, so it is
+evaluated once per difference on the grid, (2 n_x - 1)(2 n_y - 1)(2 n_z - 1) tensors,
+not N^2. Equal cells make the system symmetric, which is what makes the co-energy's
+gradient the force (below).
+
+Shapes: a cuboid is filled exactly; a sphere or cylinder (axis along z) keeps the cells
+whose centres lie inside and stretches the grid so that the cells' total volume is the
+body's (a cylinder keeps its length and its cross-section's area), which removes the
+staircase's first-order error in the induced moment. The error of the collocation and of
+the staircase falls with the cell size; tests/fields/test_soft.py and ``magdesign
+accuracy`` show how fast against exact answers.
+
+Force and torque. For a linear body in the field of fixed sources the magnetic
+co-energy is W' = (mu0 / 2) int M . H_ext dV = (1/2) sum_i V M_i . B_ext(c_i); the force
+along any pose coordinate q is dW'/dq at fixed sources (``jax.grad`` of
+:func:`coenergy` through the solve: no hand-derived force formula).
+
+Not modelled: saturation (the magnetisation is linear in H: trust it only where
+mu0 |M| stays well below the material's saturation, e.g. 2.2 T for Fe, ~0.8 T for
+Ni-Fe); the cells' own shape inside curved bodies (staircase).
+"""
+
+from typing import Literal
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import lineax as lx
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from magdesign._numerics import float_array
+from magdesign._validation import check_last_axis, check_positive
+from magdesign.fields.cuboid import FAR_NODES, cuboid_tensor
+from magdesign.units import MU0
+
+SHAPES = ("cuboid", "cylinder", "sphere")
+# The cell kernel's far form holds FAR_NODES^3 point dipoles per (point, cell) pair until
+# XLA sums them: the tensors are evaluated in batches of at most this many bytes of them.
+KERNEL_BATCH_BYTES = 1 << 28
+_BYTES_PER_TENSOR = 8 * 9 * FAR_NODES**3
+
+
+class SoftBody(eqx.Module):
+    """A linear soft-magnetic body as equal cuboid cells on a regular grid, in its own
+    frame (centre at the origin).
+
+    Fields:
+        cell: the cells' side lengths (m), shape (3,).
+        permeability: relative permeability mu_r (> 0; chi = mu_r - 1).
+        grid: (static) cells along x, y, z of the grid that holds the body.
+        index: (static) the grid indices of the body's cells, N rows of (i, j, k).
+    """
+
+    cell: Float[Array, "3"]
+    permeability: Float[Array, ""]
+    grid: tuple[int, int, int] = eqx.field(static=True)
+    index: tuple[tuple[int, int, int], ...] = eqx.field(static=True)
+
+    @property
+    def centres(self) -> Float[Array, "n 3"]:
+        """The cells' centres (m), shape (N, 3), body frame."""
+        offset = (np.asarray(self.index) - (np.asarray(self.grid) - 1) / 2.0).astype(float)
+        return jnp.asarray(offset) * self.cell
+
+    @property
+    def cell_volume(self) -> Float[Array, ""]:
+        return jnp.prod(self.cell)
+
+    @property
+    def volume(self) -> Float[Array, ""]:
+        return len(self.index) * self.cell_volume
+
+
+def soft_body(
+    shape: Literal["cuboid", "cylinder", "sphere"],
+    size: Float[ArrayLike, "..."],
+    *,
+    cells: int | tuple[int, int, int],
+    permeability: float | Float[ArrayLike, ""],
+) -> SoftBody:
+    """A soft body split into cells.
+
+    Args:
+        shape: "cuboid" (size: full sides x, y, z, m), "cylinder" (size: diameter,
+            length, m; axis along z) or "sphere" (size: diameter, m).
+        size: as above (m), each > 0. May be traced (the cells scale with it).
+        cells: cells along the body's longest side (the others in proportion, at least
+            one), or (n_x, n_y, n_z) explicitly.
+        permeability: relative permeability mu_r (> 0).
+
+    Returns:
+        The :class:`SoftBody`. Its number of cells is ``len(body.index)``.
+    """
+    if shape not in SHAPES:
+        raise ValueError(f"shape must be one of {SHAPES}, got {shape!r}")
+    size = float_array(size).reshape(-1)
+    wanted = {"cuboid": 3, "cylinder": 2, "sphere": 1}[shape]
+    if size.shape != (wanted,):
+        raise ValueError(f"size of a {shape} must hold {wanted} length(s) (m), got shape {size.shape}")
+    check_positive(size=size, permeability=permeability)
+    sides = {"cuboid": size, "cylinder": size[jnp.array([0, 0, 1])], "sphere": jnp.repeat(size, 3)}[shape]
+    grid = _grid(sides, cells)
+    centre = (np.indices(grid).reshape(3, -1).T - (np.asarray(grid) - 1) / 2.0) / np.asarray(grid)  # in body sides
+    radius2 = centre[:, 0] ** 2 + centre[:, 1] ** 2
+    inside = {
+        "cuboid": np.ones(len(centre), bool),
+        "cylinder": radius2 < 0.25,
+        "sphere": radius2 + centre[:, 2] ** 2 < 0.25,
+    }[shape]
+    if not inside.any():
+        raise ValueError(f"cells: {cells!r} puts no cell centre inside the {shape}; ask for more cells")
+    index = tuple(tuple(int(i) for i in row) for row in np.indices(grid).reshape(3, -1).T[inside])
+    cell = sides / jnp.asarray(grid, dtype=sides.dtype)
+    # curved bodies: the kept cells' volume made the body's (a cylinder keeps its length)
+    if shape == "cylinder":
+        filled = inside.sum() / grid[2]  # cells in one cross-section
+        cell = cell.at[:2].multiply(np.sqrt(np.pi / 4 * grid[0] * grid[1] / filled))
+    elif shape == "sphere":
+        cell = cell * (np.pi / 6 * np.prod(grid) / inside.sum()) ** (1.0 / 3.0)
+    return SoftBody(cell=cell, permeability=jnp.asarray(permeability, dtype=cell.dtype), grid=grid, index=index)
+
+
+def _grid(sides, cells):
+    if isinstance(cells, (tuple, list)):
+        grid = tuple(int(n) for n in cells)
+        if len(grid) != 3 or min(grid) < 1:
+            raise ValueError(f"cells must be a positive integer or three of them, got {cells!r}")
+        return grid
+    if int(cells) < 1:
+        raise ValueError(f"cells must be a positive integer or three of them, got {cells!r}")
+    try:
+        ratio = np.asarray(sides) / np.max(np.asarray(sides))
+    except Exception:  # traced sizes: the grid needs concrete proportions
+        raise ValueError("cells: with a traced size give the grid as (n_x, n_y, n_z)") from None
+    return tuple(max(1, int(round(int(cells) * r))) for r in ratio)
+
+
+def _differences(body):
+    """Index differences c_i - c_j, shifted to be >= 0 (N, N, 3), and the grid of all
+    differences (2 g - 1 per axis)."""
+    index = np.asarray(body.index)
+    span = 2 * np.asarray(body.grid) - 1
+    difference = index[:, None, :] - index[None, :, :] + (np.asarray(body.grid) - 1)
+    return np.ravel_multi_index(difference.reshape(-1, 3).T, span).reshape(len(index), len(index)), span
+
+
+def _table(body):
+    """T for every index difference on the grid (prod(2 g - 1), 3, 3), and for each pair
+    of cells the row of its difference (N, N)."""
+    flat, span = _differences(body)
+    steps = jnp.asarray(np.indices(span).reshape(3, -1).T - (np.asarray(body.grid) - 1), dtype=body.cell.dtype)
+    table = _batched(lambda step: cuboid_tensor(step * body.cell, dimension=body.cell), steps, 1)
+    return table, flat
+
+
+def _batched(fn, rows, tensors_per_row):
+    """``fn`` over ``rows`` (leading axis), in batches whose cell-kernel temporaries stay
+    within KERNEL_BATCH_BYTES."""
+    size = max(1, min(rows.shape[0], KERNEL_BATCH_BYTES // (_BYTES_PER_TENSOR * tensors_per_row)))
+    return jax.lax.map(fn, rows, batch_size=size)
+
+
+def interaction(body: SoftBody) -> Float[Array, "n3 n3"]:
+    """The block matrix of T(c_i - c_j) (dimensionless), shape (3N, 3N): B at c_i from
+    cell j is its 3x3 block times J_j (T). Symmetric."""
+    table, flat = _table(body)
+    n = len(body.index)
+    return table[flat].transpose(0, 2, 1, 3).reshape(3 * n, 3 * n)
+
+
+def magnetization(body: SoftBody, external: Float[ArrayLike, "n 3"]) -> Float[Array, "n 3"]:
+    """The cells' self-consistent magnetisation M (A/m), shape (N, 3).
+
+    Args:
+        body: the :class:`SoftBody`.
+        external: the flux density of every other source at the cells' centres
+            (``body.centres``), B_ext = mu0 H_ext (T), shape (N, 3), body frame.
+    """
+    external = float_array(external)
+    n = len(body.index)
+    if external.shape != (n, 3):
+        raise ValueError(f"external must hold the field at the body's {n} cell centres, shape ({n}, 3); got {external.shape}")
+    chi = body.permeability - 1.0
+    matrix = jnp.eye(3 * n) - chi * (interaction(body) - jnp.eye(3 * n))
+    operator = lx.MatrixLinearOperator(matrix, lx.symmetric_tag)
+    solution = lx.linear_solve(operator, chi * external.reshape(-1) / MU0, lx.LU())
+    return solution.value.reshape(n, 3)
+
+
+def field(body: SoftBody, magnetization: Float[ArrayLike, "n 3"], points: Float[ArrayLike, "... 3"]) -> Float[Array, "... 3"]:
+    """The body's own flux density B (T) at ``points`` (m, body frame, shape (..., 3)),
+    given its cells' magnetisation (A/m, (N, 3)). Inside a cell B = mu0 (H + M)."""
+    check_last_axis("points", points, 3)
+    points = float_array(points)
+    polarization, centres = MU0 * float_array(magnetization), body.centres
+
+    def at(point):
+        return jnp.einsum("nij,nj->i", cuboid_tensor(point - centres, dimension=body.cell), polarization)
+
+    flat = points.reshape(-1, 3)
+    return _batched(at, flat, len(body.index)).reshape(points.shape)
+
+
+def coenergy(body: SoftBody, external: Float[ArrayLike, "n 3"]) -> Float[Array, ""]:
+    """The magnetic co-energy W' (J) of the body in the field of fixed sources,
+    (1/2) sum_i V M_i . B_ext(c_i), M solved self-consistently; ``external`` as in
+    :func:`magnetization`. Its derivative with respect to any pose coordinate of the body
+    (at fixed sources) is the generalised force along it (N, or N m for an angle)."""
+    external = float_array(external)
+    return 0.5 * body.cell_volume * jnp.sum(magnetization(body, external) * external)
+
+
+def demagnetizing_tensor(body: SoftBody) -> Float[Array, "3 3"]:
+    """The body's magnetometric demagnetising tensor as the cells see it: -(the mean over
+    the cells of H at their centres) / M for a uniform M (dimensionless, trace ~1). It
+    tends to the exact magnetometric factors as the cells shrink."""
+    table, flat = _table(body)
+    counts = np.bincount(flat.reshape(-1), minlength=table.shape[0])
+    n = len(body.index)
+    return jnp.eye(3) - jnp.einsum("d,dij->ij", jnp.asarray(counts, dtype=table.dtype), table) / n
