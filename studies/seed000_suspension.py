@@ -30,6 +30,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from _report import Report, arguments, progress
+from magdesign._numerics import TILT_DIFFERENCE_STEP
 from magdesign.fields import cuboid, soft
 from magdesign.scene import loads_from_spec, outputs, parameters, scene_from_spec, with_parameters
 from magdesign.units import MU0, deg, mm, mT
@@ -249,7 +250,7 @@ def main(argv=None):
 
     k, k_red = moments["spring_coefficient"], charge["spring_coefficient"]
     ratio = lambda a, b: f"x{a / b:.3g}"  # noqa: E731
-    inside = lambda a, b: 1 / FACTOR <= abs(a / b) <= FACTOR  # noqa: E731
+    inside = lambda a, b: 1 / FACTOR <= a / b <= FACTOR  # noqa: E731  (signed: a wrong sign is outside)
     per_deg = lambda value: f"{value / K_UNIT:.4g} uN/deg ({value:.3g} N/rad)"  # noqa: E731
     sens = lambda value: f"{value * deg / mT:+.3g} mT/deg"  # noqa: E731
     cells_note = f"{spec['pole']['cells']} cells along the rod ({len(scene.rod.index)} in all)"
@@ -522,10 +523,10 @@ def main(argv=None):
         )
         report.text(
             f"The library's own outputs at theta = 0 ({spec['pole']['cells']} cells; five-point differences of exact co-energies "
-            f"and fields over 0.02 rad): spring_coefficient = {exact['spring_coefficient']:.6g} N/rad (this study's, a central "
+            f"and fields over {TILT_DIFFERENCE_STEP:g} rad): spring_coefficient = {exact['spring_coefficient']:.6g} N/rad (this study's, a central "
             f"difference of the exact force over +-{SECANT:g} rad: {k / exact['spring_coefficient'] - 1:+.1e}), field_sensitivity = "
             f"{exact['field_sensitivity'] * deg / mT:.6g} mT/deg ({moments['gmr_field_sensitivity'] / exact['field_sensitivity'] - 1:+.1e}: "
-            f"the library's 0.02 rad step truncates the GMR's near field by about this much; this study's step, by ~3e-7), "
+            f"the two steps' truncation of the GMR's near field), "
             f"attraction = {exact['attraction'] * 1e3:.6g} mN ({moments['attraction'] / exact['attraction'] - 1:+.1e})."
         )
 

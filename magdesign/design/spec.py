@@ -165,7 +165,7 @@ def _with_guards(limits, guards):
 # its fidelity, the spec's default level, {cheap level: the exact level that confirms it}).
 # A cylinder's "axis" level is exact where a scene may use it (every sensor on the axis),
 # so only "dipole" needs confirming. A reduced pole is not confirmed at the moments level:
-# its spec has no permeability to confirm with.
+# its spec names no permeability or cells (the defaults, Ni-Fe and 16, are guesses).
 _LEVELS = {
     ("mechanics", "model", "dome"): ("dome", "mechanics", "reissner", {"reissner": "axisymmetric"}),
     ("mechanics", "model", "layer"): ("layer", "mechanics", "hooke", {}),

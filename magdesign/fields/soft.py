@@ -15,9 +15,9 @@ gradient the force (below).
 
 Shapes: a cuboid is filled exactly; a sphere or cylinder (axis along z) keeps the cells
 whose centres lie inside and stretches the grid so that the cells' total volume is the
-body's (a cylinder keeps its length and its cross-section's area), which removes the
-staircase's first-order error in the induced moment. The error of the collocation and of
-the staircase falls with the cell size; tests/fields/test_soft.py and ``magdesign
+body's (a cylinder keeps its length and its cross-section's area); the staircase's shape
+error remains. The error of the collocation and of the staircase falls like the cell size
+at high permeability (slower than that for a staircase sphere); tests/fields/test_soft.py and ``magdesign
 accuracy`` show how fast against exact answers.
 
 Force and torque. For a linear body in the field of fixed sources the magnetic
@@ -44,7 +44,10 @@ from magdesign._validation import check_last_axis, check_positive
 from magdesign.fields.cuboid import FAR_NODES, cuboid_tensor
 from magdesign.units import MU0
 
-SHAPES = ("cuboid", "cylinder", "sphere")
+# The shapes and how many lengths (m) their size holds.
+SIZE_LENGTHS = {"cuboid": 3, "cylinder": 2, "sphere": 1}
+# The most cells a body may have: its dense system is (3N)^2 float64 (N = 6000: 2.6 GB).
+MAX_CELLS = 6000
 # The cell kernel's far form holds FAR_NODES^3 point dipoles per (point, cell) pair until
 # XLA sums them: the tensors are evaluated in batches of at most this many bytes of them.
 KERNEL_BATCH_BYTES = 1 << 28
@@ -102,10 +105,10 @@ def soft_body(
     Returns:
         The :class:`SoftBody`. Its number of cells is ``len(body.index)``.
     """
-    if shape not in SHAPES:
-        raise ValueError(f"shape must be one of {SHAPES}, got {shape!r}")
+    if shape not in SIZE_LENGTHS:
+        raise ValueError(f"shape must be one of {tuple(SIZE_LENGTHS)}, got {shape!r}")
     size = float_array(size).reshape(-1)
-    wanted = {"cuboid": 3, "cylinder": 2, "sphere": 1}[shape]
+    wanted = SIZE_LENGTHS[shape]
     if size.shape != (wanted,):
         raise ValueError(f"size of a {shape} must hold {wanted} length(s) (m), got shape {size.shape}")
     check_positive(size=size, permeability=permeability)
@@ -120,6 +123,8 @@ def soft_body(
     }[shape]
     if not inside.any():
         raise ValueError(f"cells: {cells!r} puts no cell centre inside the {shape}; ask for more cells")
+    if inside.sum() > MAX_CELLS:
+        raise ValueError(f"cells: {cells!r} gives {inside.sum()} cells, more than the {MAX_CELLS} a dense solve holds; ask for fewer")
     index = tuple(tuple(int(i) for i in row) for row in np.indices(grid).reshape(3, -1).T[inside])
     cell = sides / jnp.asarray(grid, dtype=sides.dtype)
     # curved bodies: the kept cells' volume made the body's (a cylinder keeps its length)

@@ -26,7 +26,7 @@ from magdesign.scene.film_scene import FilmScene
 from magdesign.scene.loads import loads_from_spec
 from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadout
 from magdesign.scene.mechanics import Dome, Layer
-from magdesign.fields.soft import soft_body
+from magdesign.fields.soft import SIZE_LENGTHS, soft_body
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions
 from magdesign.transducers import SpinValve, ak8963, inesc_spin_valve, mlx90393, panasonic_meander
@@ -219,8 +219,15 @@ def _extra_magnets(magnet):
     )
 
 
-SOFT_SIZES = {"cuboid": 3, "cylinder": 2, "sphere": 1}  # lengths in a [[soft]] part's size
 SOFT_CELLS = 8
+
+
+def _soft_grid(key, shape, size, cells, permeability):
+    """The cell grid of a soft body, or a SpecError naming ``key``."""
+    try:
+        return soft_body(shape, size, cells=cells, permeability=permeability).grid
+    except ValueError as error:
+        raise SpecError(f"{key}: {error}") from None
 
 
 def _soft_parts(spec):
@@ -228,15 +235,15 @@ def _soft_parts(spec):
     frame) and rotation, fixed unless ``moves = true``."""
     parts = []
     for name, table, centre, angles, moves in _posed_tables(spec.get("soft", []), "soft", False):
-        shape = table.choice("shape", tuple(SOFT_SIZES))
-        count = SOFT_SIZES[shape]
+        shape = table.choice("shape", tuple(SIZE_LENGTHS))
+        count = SIZE_LENGTHS[shape]
         size = table.quantities("size", "m", length=count) if count > 1 else [table.quantity("size", "m")]
         if min(size) <= 0:
             raise SpecError(f"{name}.size: expected lengths > 0 (m), got {echo(table._get('size', None))}")
         permeability = table.quantity("permeability", "1")
         if permeability <= 0:
             raise SpecError(f"{name}.permeability: a relative permeability must be > 0, got {permeability:g}")
-        grid = soft_body(shape, size, cells=table.integer("cells", default=SOFT_CELLS), permeability=permeability).grid
+        grid = _soft_grid(f"{name}.cells", shape, size, table.integer("cells", default=SOFT_CELLS), permeability)
         parts.append(SoftPart(size=jnp.asarray(size), permeability=jnp.asarray(permeability), centre=centre,
                               angles=angles, shape=shape, grid=grid, moves=moves))
     return tuple(parts)
@@ -389,7 +396,7 @@ def _pole_scene(spec, fidelity):
         if permeability <= 0:
             raise SpecError(f"pole.permeability: a relative permeability must be > 0, got {permeability:g}")
         cells = pole.integer("cells", default=POLE_CELLS)
-        rod_cells = soft_body("cylinder", [diameter, length], cells=cells, permeability=permeability).grid
+        rod_cells = _soft_grid("pole.cells", "cylinder", [diameter, length], cells, permeability)
         permeability = jnp.asarray(permeability)
     pole.done()
     mechanics = Table(spec, "mechanics")

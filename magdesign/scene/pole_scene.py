@@ -141,6 +141,8 @@ class PoleScene(AbstractScene):
     def rod(self):
         """The rod as a :class:`~magdesign.fields.soft.SoftBody` (moments level), in its
         own frame: centre at the origin, axis along z."""
+        if self.fidelity != "moments":
+            raise ValueError("the rod is a soft body at the moments level only (pole.fidelity = 'moments')")
         return soft.soft_body("cylinder", jnp.stack([self.pole_diameter, self.pole_length]),
                               cells=self.rod_cells, permeability=self.permeability)
 

@@ -2,7 +2,8 @@
 that do not come from it: the sphere in a uniform field (M = 3 chi / (3 + chi) H0),
 Aharoni's magnetometric factors of prisms and the closed-form factors of cylinders, and
 the force and induced field of a soft sphere beside a point dipole from the exact multipole
-series (all three at 40 digits in references/soft.json, make_soft_references.py).
+series (all three computed at 40 digits, stored to 25, in references/soft.json,
+make_soft_references.py).
 
 Tolerances are the method's own discretisation error, measured (the cells in each test's
 docstring); the tests of the factors and of the uniform field also assert that the error
@@ -26,6 +27,8 @@ solve = jax.jit(soft.magnetization)
 
 
 def test_the_cell_tensor_is_the_cuboid_field_for_each_direction_and_symmetric():
+    """Consistency of the two entry points (cuboid is T J; its values are checked against
+    references in test_cuboid.py) and the symmetry the moments system relies on."""
     rng = np.random.default_rng(0)
     points = rng.uniform(-3e-3, 3e-3, (50, 3))
     dimension = np.array([1e-3, 2e-3, 0.5e-3])
@@ -152,6 +155,7 @@ def test_a_cube_turned_by_90_degrees_answers_the_same():
     (lambda: soft.soft_body("cylinder", 1e-3, cells=4, permeability=2.0), "size"),
     (lambda: soft.soft_body("sphere", -1e-3, cells=4, permeability=2.0), "size"),
     (lambda: soft.soft_body("sphere", 1e-3, cells=0, permeability=2.0), "cells"),
+    (lambda: soft.soft_body("cuboid", [1e-3] * 3, cells=20, permeability=2.0), "cells"),
     (lambda: soft.soft_body("sphere", 1e-3, cells=4, permeability=0.0), "permeability"),
     (lambda: soft.magnetization(soft.soft_body("sphere", 1e-3, cells=4, permeability=2.0), np.zeros((3, 3))), "external"),
 ])

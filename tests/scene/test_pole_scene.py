@@ -70,6 +70,9 @@ def _plate(p):
                                  position=(0, 0, -p["magnet.height"] / 2))
 
 
+field = eqx.filter_jit(lambda scene, points, displacement: scene.source_field(points, displacement))
+
+
 def _moments_scene(cells=8):
     spec = example("pole_plate")
     spec["pole"]["cells"] = cells
@@ -99,7 +102,7 @@ def test_moments_field_against_magpylib_cuboids():
     cells, *_ = _rod_in_magpylib(scene, theta)
     points = np.array([[0.5e-3, 0.0, 0.1e-3], [-0.7e-3, 0.2e-3, 0.3e-3], [1.5e-3, -0.4e-3, 0.2e-3]])
     displacement = scene.tip(theta) - scene.tip(0.0)
-    value = np.asarray(eqx.filter_jit(lambda s, x, d: s.source_field(x, d))(scene, points, displacement))
+    value = np.asarray(field(scene, points, displacement))
     expected = _plate(p).getB(points) + cells.getB(points)
     np.testing.assert_allclose(value, expected, rtol=1e-9, atol=1e-12)
 
@@ -135,14 +138,18 @@ def test_moments_coenergy_gradient_is_the_kelvin_force_and_torque():
 
 
 def test_moments_outputs_restore_and_their_differences_hold():
-    """The spring coefficient (five-point differences of W') against a central difference
-    of the exact force over a 50x smaller step, and the force odd in theta and restoring."""
+    """The spring coefficient and the field sensitivity (five-point differences of W' and
+    of the chain's field) against central differences of the exact force and of the GMR's
+    field over a smaller step, and the force odd in theta and restoring."""
     scene = _moments_scene()
     force = eqx.filter_jit(lambda s, t: jax.vmap(s.tangential_force)(t))
     h = 4e-4
     f = np.asarray(force(scene, np.array([-h, h, -0.3, 0.3])))
     out = {k: float(v) for k, v in eqx.filter_jit(lambda s: s.outputs(None))(scene).items()}
     np.testing.assert_allclose(out["spring_coefficient"], -(f[1] - f[0]) / (2 * h), rtol=1e-6)
+    gmr = scene.sensor_poses()[0]
+    b = [np.asarray(field(scene, gmr, scene.tip(t) - scene.tip(0.0)))[0, 0] for t in (-h, h)]
+    np.testing.assert_allclose(out["field_sensitivity"], (b[1] - b[0]) / (2 * h), rtol=1e-5)
     np.testing.assert_allclose(f[2], -f[3], rtol=1e-10)
     assert f[3] < 0 < out["spring_coefficient"] and out["attraction"] > 0
 
@@ -155,4 +162,8 @@ def test_moments_spec_errors_name_the_key():
     spec = example("pole_plate")
     spec["pole"]["permeability"] = -3
     with pytest.raises(SpecError, match="pole.permeability"):
+        scene_from_spec(spec)
+    spec = example("pole_plate")
+    spec["pole"]["cells"] = 200  # 200 x 60 x 60 cells: more than a dense solve holds
+    with pytest.raises(SpecError, match="pole.cells"):
         scene_from_spec(spec)
