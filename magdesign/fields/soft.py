@@ -114,7 +114,8 @@ def soft_body(
     check_positive(size=size, permeability=permeability)
     sides = {"cuboid": size, "cylinder": size[jnp.array([0, 0, 1])], "sphere": jnp.repeat(size, 3)}[shape]
     grid = _grid(sides, cells)
-    centre = (np.indices(grid).reshape(3, -1).T - (np.asarray(grid) - 1) / 2.0) / np.asarray(grid)  # in body sides
+    indices = np.indices(grid).reshape(3, -1).T
+    centre = (indices - (np.asarray(grid) - 1) / 2.0) / np.asarray(grid)  # in body sides
     radius2 = centre[:, 0] ** 2 + centre[:, 1] ** 2
     inside = {
         "cuboid": np.ones(len(centre), bool),
@@ -125,7 +126,7 @@ def soft_body(
         raise ValueError(f"cells: {cells!r} puts no cell centre inside the {shape}; ask for more cells")
     if inside.sum() > MAX_CELLS:
         raise ValueError(f"cells: {cells!r} gives {inside.sum()} cells, more than the {MAX_CELLS} a dense solve holds; ask for fewer")
-    index = tuple(tuple(int(i) for i in row) for row in np.indices(grid).reshape(3, -1).T[inside])
+    index = tuple(tuple(int(i) for i in row) for row in indices[inside])
     cell = sides / jnp.asarray(grid, dtype=sides.dtype)
     # curved bodies: the kept cells' volume made the body's (a cylinder keeps its length)
     if shape == "cylinder":

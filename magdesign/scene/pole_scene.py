@@ -53,16 +53,16 @@ below the cells' discretisation error), and the attraction is -dW'/dz.
 
 from typing import ClassVar
 
-import jax
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from magdesign._numerics import TILT_DIFFERENCE_STEP
 from magdesign.fields import cylinder, soft
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.magnet_scene import SpinValveReadout
-from magdesign._numerics import TILT_DIFFERENCE_STEP
 from magdesign.units import MU0
 
 
