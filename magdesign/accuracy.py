@@ -58,6 +58,7 @@ DOME_MESHES = ((1, 12), (2, 12), (2, 16), (4, 32))
 AREA_POINTS_PER_SIDE = (1, 2, 4, 8)
 AREA_REFERENCE_POINTS = 16
 SOFT_SPHERE_CELLS = (4, 8, 12, 16)
+SATURATED_SPHERE_CELLS = (4, 8, 12)
 POLE_CELLS = (24, 8, 12, 16)  # the first is the reference
 
 SEED001_MAGNET = dict(radius=1.5 * mm, height=1 * mm, polarization=1.17)
@@ -214,8 +215,8 @@ def measure_dome():
 
 
 def measure_soft():
-    """The method of moments: a soft sphere against its exact answer, and seed 000's pole
-    at its cell counts against the finest."""
+    """The method of moments: a soft sphere (linear; saturated) against its exact answer, and
+    seed 000's pole at its cell counts against the finest."""
     rows = []
     field = jnp.array([0.0, 0.0, 1e-3])
     exact = 3.0 * 999.0 / 1002.0 * float(field[2]) / MU0
@@ -226,6 +227,13 @@ def measure_soft():
         error = abs(float(jnp.mean(solve_soft(body, external)[:, 2])) / exact - 1)
         rows.append(Row("soft sphere (moments)", f"{cells} cells across", error, _warm_seconds(solve_soft, body, external),
                         "relative", "one solve"))
+    applied, saturated = 1.0, _saturated_sphere(299.0, 2.2, 1.0)  # Fe in 1 T
+    for cells in SATURATED_SPHERE_CELLS:
+        body = soft.soft_body("sphere", 2 * mm, cells=cells, permeability=300.0, saturation=2.2)
+        external = jnp.broadcast_to(jnp.array([0.0, 0.0, applied]), (len(body.index), 3))
+        error = abs(MU0 * float(jnp.mean(solve_soft(body, external)[:, 2])) / saturated - 1)
+        rows.append(Row("saturated Fe sphere, 1 T", f"{cells} cells across", error,
+                        _warm_seconds(solve_soft, body, external), "relative", "one solve"))
     spec = tomllib.loads((Path(__file__).resolve().parents[1] / "examples" / "pole_plate.toml").read_text())
     outputs = eqx.filter_jit(lambda scene: scene.outputs(None)["spring_coefficient"])
     levels = [(f"moments {n} cells", dict(cells=n)) for n in POLE_CELLS] + [("reduced", dict(fidelity="reduced", demagnetizing_factor=0.1))]
@@ -238,6 +246,20 @@ def measure_soft():
     for name, _ in levels:
         rows.append(Row("seed-000 pole spring", name, abs(values[name] / reference - 1), seconds[name], "relative", "one spring coefficient"))
     return rows
+
+
+def _saturated_sphere(chi, saturation, applied):
+    """J (T) of a uniformly magnetised sphere of the saturation law in a uniform field
+    ``applied`` (T): the root of J - f(applied - J / 3), by bisection."""
+    low, high = 0.0, min(saturation, 3.0 * applied)
+    for _ in range(200):
+        middle = 0.5 * (low + high)
+        h = applied - middle / 3.0
+        if middle < chi * h / np.sqrt(1.0 + (chi * h / saturation) ** 2):
+            low = middle
+        else:
+            high = middle
+    return 0.5 * (low + high)
 
 
 def measure_default_design():

@@ -30,7 +30,7 @@ from magdesign.design.problem import Limit, Objective, Problem, Target, Variable
 from magdesign.design.sweep import sweepable
 from magdesign.scene import (MECHANICS_CONVERGED, AbstractScene, Loads, MagnetScene, loads_from_spec, outputs,
                              parameters, scene_from_spec, with_parameters)
-from magdesign.scene._spec import PARAMETER_UNITS, check_domain, check_keys, sub_table
+from magdesign.scene._spec import check_domain, check_keys, parameter_unit, sub_table
 from magdesign.scene.build import check_wall
 from magdesign.scene.mechanics import Dome
 from magdesign.units import SpecError, echo, parse, written_unit
@@ -92,7 +92,7 @@ def _parameter_unit(spec, name):
     the parameter in ("mm"), else its SI unit; "1" for a dimensionless one."""
     table, _, key = name.rpartition(".")
     value = spec.get(table, {}).get(key) if table else spec.get(key)
-    si = PARAMETER_UNITS.get(name, "1")
+    si = parameter_unit(name)
     return si, written_unit(value) or si
 
 

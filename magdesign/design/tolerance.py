@@ -56,7 +56,7 @@ from magdesign.design.solve import solve
 from magdesign.design.spec import problem_from_spec
 from magdesign.scene import AbstractScene, Loads, loads_from_spec, outputs, parameters, with_parameters
 from magdesign.scene import effects as fx
-from magdesign.scene._spec import PARAMETER_UNITS, check_keys, sub_table
+from magdesign.scene._spec import check_keys, parameter_unit, sub_table
 from magdesign.scene.build import NDFEB_DRIFT
 from magdesign.units import SpecError, convert, echo, parse, written_unit
 
@@ -219,7 +219,7 @@ def tolerance_problem_from_spec(spec: dict, *, fidelity: str | None = None) -> T
                 scene = dataclasses.replace(scene, fidelity="exact")
             scene = _with_effect(scene, name, spec)
         elif name in known:
-            unit, per_axis = PARAMETER_UNITS.get(name, "1"), False
+            unit, per_axis = parameter_unit(name), False
         else:
             raise SpecError(f"{where}: unknown input; expected a scene parameter ({', '.join(sorted(known))}), "
                             "placement, tilt or temperature")

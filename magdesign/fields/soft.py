@@ -25,9 +25,25 @@ co-energy is W' = (mu0 / 2) int M . H_ext dV = (1/2) sum_i V M_i . B_ext(c_i); t
 along any pose coordinate q is dW'/dq at fixed sources (``jax.grad`` of
 :func:`coenergy` through the solve: no hand-derived force formula).
 
-Not modelled: saturation (the magnetisation is linear in H: trust it only where
-mu0 |M| stays well below the material's saturation, e.g. 2.2 T for Fe, ~0.8 T for
-Ni-Fe); the cells' own shape inside curved bodies (staircase).
+Saturation (optional, ``saturation`` = J_s = mu0 M_s in T, e.g. 2.2 T for Fe, ~0.8 T for
+Ni-Fe): each cell follows the isotropic, anhysteretic law
+
+    J = chi h / sqrt(1 + (chi |h| / J_s)^2),          J = mu0 M, h = mu0 H (T),
+
+of initial slope chi and limit J_s (linear as J_s -> inf). The equations above then are
+nonlinear; they are solved by Levenberg-Marquardt (optimistix, implicit derivatives) from the
+linear answer pulled onto the law, judged on their residual; a solve that does not converge
+raises an error naming it. The co-energy keeps its meaning: W' = sum_i V (J_i . B_ext,i
++ (1/2) J_i . ((T - 1) J)_i - w(J_i)) / mu0 with the law's energy density
+w(J) = (J_s^2 / chi) (1 - sqrt(1 - |J|^2 / J_s^2)) (w'(J) = h), which equals
+(1/2) sum_i V M_i . B_ext,i for a linear body and is stationary in J at the solution, so its
+pose derivative is again the force.
+
+Several bodies (:func:`coupled_magnetization`) magnetise one another: one system holds all
+their cells, the blocks between two bodies evaluated pair by pair in the bodies' own frames.
+
+Not modelled: hysteresis and remanence of the soft parts; the cells' own shape inside
+curved bodies (staircase).
 """
 
 from typing import Literal
@@ -37,9 +53,10 @@ import jax
 import jax.numpy as jnp
 import lineax as lx
 import numpy as np
+import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float
 
-from magdesign._numerics import float_array
+from magdesign._numerics import SATURATION_ATOL, SATURATION_MAX_STEPS, SATURATION_RESIDUAL, SATURATION_RTOL, float_array
 from magdesign._validation import check_last_axis, check_positive
 from magdesign.fields.cuboid import FAR_NODES, cuboid_tensor
 from magdesign.units import MU0
@@ -63,12 +80,14 @@ class SoftBody(eqx.Module):
         permeability: relative permeability mu_r (> 0; chi = mu_r - 1).
         grid: (static) cells along x, y, z of the grid that holds the body.
         index: (static) the grid indices of the body's cells, N rows of (i, j, k).
+        saturation: saturation polarisation J_s = mu0 M_s (T, > 0), or None: linear.
     """
 
     cell: Float[Array, "3"]
     permeability: Float[Array, ""]
     grid: tuple[int, int, int] = eqx.field(static=True)
     index: tuple[tuple[int, int, int], ...] = eqx.field(static=True)
+    saturation: Float[Array, ""] | None = None
 
     @property
     def centres(self) -> Float[Array, "n 3"]:
@@ -91,6 +110,7 @@ def soft_body(
     *,
     cells: int | tuple[int, int, int],
     permeability: float | Float[ArrayLike, ""],
+    saturation: float | Float[ArrayLike, ""] | None = None,
 ) -> SoftBody:
     """A soft body split into cells.
 
@@ -101,6 +121,8 @@ def soft_body(
         cells: cells along the body's longest side (the others in proportion, at least
             one), or (n_x, n_y, n_z) explicitly.
         permeability: relative permeability mu_r (> 0).
+        saturation: saturation polarisation J_s = mu0 M_s (T, > 0; e.g. 2.2 T for Fe),
+            or None (default) for a linear body.
 
     Returns:
         The :class:`SoftBody`. Its number of cells is ``len(body.index)``.
@@ -112,6 +134,9 @@ def soft_body(
     if size.shape != (wanted,):
         raise ValueError(f"size of a {shape} must hold {wanted} length(s) (m), got shape {size.shape}")
     check_positive(size=size, permeability=permeability)
+    if saturation is not None:
+        check_positive(saturation=saturation)
+        saturation = jnp.asarray(saturation, dtype=size.dtype)
     sides = {"cuboid": size, "cylinder": size[jnp.array([0, 0, 1])], "sphere": jnp.repeat(size, 3)}[shape]
     grid = _grid(sides, cells)
     indices = np.indices(grid).reshape(3, -1).T
@@ -134,7 +159,8 @@ def soft_body(
         cell = cell.at[:2].multiply(np.sqrt(np.pi / 4 * grid[0] * grid[1] / filled))
     elif shape == "sphere":
         cell = cell * (np.pi / 6 * np.prod(grid) / inside.sum()) ** (1.0 / 3.0)
-    return SoftBody(cell=cell, permeability=jnp.asarray(permeability, dtype=cell.dtype), grid=grid, index=index)
+    return SoftBody(cell=cell, permeability=jnp.asarray(permeability, dtype=cell.dtype), grid=grid, index=index,
+                    saturation=saturation)
 
 
 def _grid(sides, cells):
@@ -192,16 +218,116 @@ def magnetization(body: SoftBody, external: Float[ArrayLike, "n 3"]) -> Float[Ar
         body: the :class:`SoftBody`.
         external: the flux density of every other source at the cells' centres
             (``body.centres``), B_ext = mu0 H_ext (T), shape (N, 3), body frame.
+
+    Raises:
+        An error naming the saturation solve (at run time, also under jit) when a
+        saturating body's solve does not converge.
     """
+    external = _external_of(body, external)
+    return _solve(interaction(body), [body], external) / MU0
+
+
+def coupled_magnetization(
+    bodies: list[SoftBody],
+    centres: list[Float[ArrayLike, "3"]],
+    matrices: list[Float[ArrayLike, "3 3"]],
+    externals: list[Float[ArrayLike, "n 3"]],
+) -> list[Float[Array, "n 3"]]:
+    """The magnetisation M (A/m) of several soft bodies that magnetise one another, each
+    (N_b, 3) in its own frame.
+
+    Args:
+        bodies: the :class:`SoftBody` s.
+        centres: each body's centre (3,) (m, scene frame).
+        matrices: each body's rotation (3, 3): v_body = matrix v_scene.
+        externals: the flux density of the other sources (not these bodies) at each body's
+            cell centres (T), (N_b, 3), in that body's frame.
+
+    Raises:
+        As :func:`magnetization`.
+    """
+    externals = [_external_of(body, external) for body, external in zip(bodies, externals)]
+    centres = [float_array(centre) for centre in centres]
+    matrices = [float_array(matrix) for matrix in matrices]
+    rows = [
+        jnp.concatenate([
+            interaction(a) if i == k else _cross_interaction(a, centres[i], matrices[i], b, centres[k], matrices[k])
+            for k, b in enumerate(bodies)
+        ], axis=1)
+        for i, a in enumerate(bodies)
+    ]
+    polarization = _solve(jnp.concatenate(rows, axis=0), bodies, jnp.concatenate(externals))
+    ends = np.cumsum([len(body.index) for body in bodies])[:-1]
+    return [part / MU0 for part in jnp.split(polarization, ends)]
+
+
+def _external_of(body, external):
     external = float_array(external)
     n = len(body.index)
     if external.shape != (n, 3):
         raise ValueError(f"external must hold the field at the body's {n} cell centres, shape ({n}, 3); got {external.shape}")
-    chi = body.permeability - 1.0
-    matrix = jnp.eye(3 * n) - chi * (interaction(body) - jnp.eye(3 * n))
-    operator = lx.MatrixLinearOperator(matrix, lx.symmetric_tag)
-    solution = lx.linear_solve(operator, chi * external.reshape(-1) / MU0, lx.LU())
-    return solution.value.reshape(n, 3)
+    return external
+
+
+def _cross_interaction(a, centre_a, matrix_a, b, centre_b, matrix_b):
+    """The (3 N_a, 3 N_b) block taking b's cells' polarisation (T, b's frame) to the flux
+    density at a's cell centres (T, a's frame)."""
+    points = centre_a + a.centres @ matrix_a  # a's centres, scene frame
+    local = (points - centre_b) @ matrix_b.T  # in b's frame
+    steps = (local[:, None, :] - b.centres[None, :, :]).reshape(-1, 3)
+    tensors = _batched(lambda step: cuboid_tensor(step, dimension=b.cell), steps, 1)
+    tensors = tensors.reshape(len(a.index), len(b.index), 3, 3)
+    turned = jnp.einsum("kl,ijlm->ikjm", matrix_a @ matrix_b.T, tensors)
+    return turned.reshape(3 * len(a.index), 3 * len(b.index))
+
+
+def _law(bodies):
+    """Per cell: chi (N, 1) and J_s (N, 1) (T; inf for a linear body)."""
+    chi = jnp.concatenate([jnp.full((len(b.index), 1), b.permeability - 1.0) for b in bodies])
+    limit = jnp.concatenate([
+        jnp.full((len(b.index), 1), jnp.inf if b.saturation is None else b.saturation) for b in bodies
+    ])
+    return chi, limit
+
+
+def _polarization(h, chi, limit):
+    """The law J(h) = chi h / sqrt(1 + (chi |h| / J_s)^2) (T), h = mu0 H (T), per row."""
+    return chi * h / jnp.sqrt(1.0 + jnp.sum((chi * h / limit) ** 2, axis=-1, keepdims=True))
+
+
+def _solve(matrix, bodies, external):
+    """The cells' polarisation J = mu0 M (T), (N, 3), for the interaction ``matrix``
+    (3N, 3N) of ``bodies`` and the external flux density (N, 3) (T)."""
+    n = external.shape[0]
+    chi, limit = _law(bodies)
+    rows = jnp.repeat(chi[:, 0], 3)
+    system = jnp.eye(3 * n) - rows[:, None] * (matrix - jnp.eye(3 * n))
+    linear = lx.linear_solve(lx.MatrixLinearOperator(system), rows * external.reshape(-1), lx.LU()).value.reshape(n, 3)
+    if all(body.saturation is None for body in bodies):
+        return linear
+
+    def residual(polarization, args):
+        matrix, external, chi, limit = args
+        h = external + (matrix @ polarization.reshape(-1)).reshape(n, 3) - polarization
+        return polarization - _polarization(h, chi, limit)
+
+    # Levenberg-Marquardt on the residual (plain Newton diverges from this start on deep
+    # saturation, where the law's slope falls from chi to ~0); the start is the linear
+    # answer pulled onto the law (|J| < J_s). Converged means the residual itself is small.
+    args = (matrix, external, chi, limit)
+    start = linear / jnp.sqrt(1.0 + jnp.sum((linear / limit) ** 2, axis=-1, keepdims=True))
+    solution = optx.root_find(
+        residual, optx.LevenbergMarquardt(rtol=SATURATION_RTOL, atol=SATURATION_ATOL), start, args=args,
+        max_steps=SATURATION_MAX_STEPS, adjoint=optx.ImplicitAdjoint(linear_solver=lx.LU()), throw=False,
+    )
+    failed = (solution.result != optx.RESULTS.successful) | ~(
+        jnp.max(jnp.abs(residual(solution.value, args))) <= SATURATION_RESIDUAL
+    )
+    return eqx.error_if(
+        solution.value, failed,
+        "soft-magnetic saturation: the solve of the cells' magnetisation did not converge "
+        f"in {SATURATION_MAX_STEPS} steps (check the saturation and the field's size)",
+    )
 
 
 def field(body: SoftBody, magnetization: Float[ArrayLike, "n 3"], points: Float[ArrayLike, "... 3"]) -> Float[Array, "... 3"]:
@@ -219,12 +345,22 @@ def field(body: SoftBody, magnetization: Float[ArrayLike, "n 3"], points: Float[
 
 
 def coenergy(body: SoftBody, external: Float[ArrayLike, "n 3"]) -> Float[Array, ""]:
-    """The magnetic co-energy W' (J) of the body in the field of fixed sources,
-    (1/2) sum_i V M_i . B_ext(c_i), M solved self-consistently; ``external`` as in
-    :func:`magnetization`. Its derivative with respect to any pose coordinate of the body
-    (at fixed sources) is the generalised force along it (N, or N m for an angle)."""
-    external = float_array(external)
-    return 0.5 * body.cell_volume * jnp.sum(magnetization(body, external) * external)
+    """The magnetic co-energy W' (J) of the body in the field of fixed sources, M solved
+    self-consistently; ``external`` as in :func:`magnetization`. Linear body:
+    (1/2) sum_i V M_i . B_ext(c_i); saturating body: the module docstring's form. Its
+    derivative with respect to any pose coordinate of the body (at fixed sources) is the
+    generalised force along it (N, or N m for an angle)."""
+    external = _external_of(body, external)
+    matrix = interaction(body)
+    polarization = _solve(matrix, [body], external)
+    if body.saturation is None:
+        return 0.5 * body.cell_volume * jnp.sum(polarization * external) / MU0
+    chi, limit = body.permeability - 1.0, body.saturation
+    fraction = jnp.sum(polarization**2, axis=-1) / limit**2  # < 1 on the law
+    density = (limit**2 / chi) * fraction / (1.0 + jnp.sqrt(1.0 - fraction))  # w(J), no cancellation
+    own = (matrix @ polarization.reshape(-1)).reshape(-1, 3) - polarization
+    total = jnp.sum(polarization * external) + 0.5 * jnp.sum(polarization * own) - jnp.sum(density)
+    return body.cell_volume * total / MU0
 
 
 def demagnetizing_tensor(body: SoftBody) -> Float[Array, "3 3"]:

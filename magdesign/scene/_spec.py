@@ -23,7 +23,8 @@ DOMAINS = {
          "mechanics.c10", "mechanics.youngs_modulus", "mechanics.shear_modulus", "mechanics.bulk_modulus",
          "mechanics.spring", "geometry.gap", "pole.ball_radius", "pole.diameter", "pole.length", "inductors.area",
          "inductors.turns", "sensor.amplification", "inductors.amplification", "scene.area",
-         "scene.lag_time_constant", "scene.saturation_limit", "scene.lsb"],
+         "scene.lag_time_constant", "scene.saturation_limit", "scene.lsb", "soft.size", "soft.permeability",
+         "soft.saturation", "pole.permeability", "pole.saturation"],
         _POSITIVE,
     ),
     **dict.fromkeys(["mechanics.c01", "sensor.pitch", "scene.noise", "sensor.height", "inductors.noise"], _NONNEGATIVE),
@@ -40,12 +41,24 @@ PARAMETER_UNITS = {
                      "mechanics.bulk_modulus"], "Pa"),
     "mechanics.contact_area": "m^2",
     "mechanics.spring": "N/rad",
+    "pole.saturation": "T",
+    "soft.size": "m",
+    "soft.position": "m",
+    "soft.saturation": "T",
 }
+# A [[soft]] part's numbers, "soft[i].key" or "soft[i].key[k]", are read as "soft.key".
+_SOFT_NUMBER = re.compile(r"^soft\[\d+\]\.(\w+)(\[\d\])?$")
+
 # Values far outside real parts: allowed, with a warning. (key: (highest plausible, unit, why))
 PLAUSIBLE = {
     "magnet.remanence": (1.6, "T", "the strongest permanent magnets (NdFeB) reach about 1.5 T"),
     "magnet.magnetization": (1.6, "T", "the strongest permanent magnets (NdFeB) reach about 1.5 T"),
 }
+
+
+def parameter_unit(name: str) -> str:
+    """The SI unit of scene parameter ``name`` (:data:`PARAMETER_UNITS`); "1" if dimensionless."""
+    return PARAMETER_UNITS.get(_SOFT_NUMBER.sub(r"soft.\1", name), "1")
 
 
 class PlausibilityWarning(UserWarning):
@@ -58,6 +71,7 @@ def check_domain(name: str, value: float, *, key: str | None = None, unit: str =
     is far outside real parts (:data:`PLAUSIBLE`)."""
     key = key or name
     name = re.sub(r"\.extra\[\d+\]", "", name)  # a further magnet's numbers are a magnet's
+    name = _SOFT_NUMBER.sub(r"soft.\1", name)
     if name in DOMAINS:
         low, low_ok, high, high_ok = DOMAINS[name]
         below = low is not None and (value < low or (value == low and not low_ok))

@@ -231,21 +231,20 @@ def _soft_grid(key, shape, size, cells, permeability):
 
 
 def _soft_parts(spec):
-    """[[soft]]: linear soft-magnetic parts (method of moments), each at its centre (scene
-    frame) and rotation, fixed unless ``moves = true``."""
+    """[[soft]]: soft-magnetic parts (method of moments), each at its centre (scene frame)
+    and rotation, fixed unless ``moves = true``, linear unless it gives a ``saturation``."""
     parts = []
     for name, table, centre, angles, moves in _posed_tables(spec.get("soft", []), "soft", False):
         shape = table.choice("shape", tuple(SIZE_LENGTHS))
         count = SIZE_LENGTHS[shape]
         size = table.quantities("size", "m", length=count) if count > 1 else [table.quantity("size", "m")]
-        if min(size) <= 0:
-            raise SpecError(f"{name}.size: expected lengths > 0 (m), got {echo(table._get('size', None))}")
         permeability = table.quantity("permeability", "1")
-        if permeability <= 0:
-            raise SpecError(f"{name}.permeability: a relative permeability must be > 0, got {permeability:g}")
+        saturation = table.quantity("saturation", "T", default=None)
+        saturation = None if saturation is None else jnp.asarray(saturation)
         grid = _soft_grid(f"{name}.cells", shape, size, table.integer("cells", default=SOFT_CELLS), permeability)
-        parts.append(SoftPart(size=jnp.asarray(size), permeability=jnp.asarray(permeability), centre=centre,
-                              angles=angles, shape=shape, grid=grid, moves=moves))
+        parts.append(SoftPart(size=tuple(jnp.asarray(v) for v in size), permeability=jnp.asarray(permeability),
+                              centre=tuple(centre), angles=angles, shape=shape, grid=grid, moves=moves,
+                              saturation=saturation))
     return tuple(parts)
 
 
@@ -388,16 +387,16 @@ def _pole_scene(spec, fidelity):
         raise SpecError(f"pole.length: a {length * 1e3:g} mm rod does not fit in a ball of radius "
                         f"{ball_radius * 1e3:g} mm; expected at most its diameter")
     level = pole.choice("fidelity", ("reduced", "moments"), default="reduced")
-    demag = permeability = rod_cells = None
+    demag = permeability = rod_cells = saturation = None
     if level == "reduced":
         demag = jnp.asarray(pole.quantity("demagnetizing_factor", "1"))
     else:
         permeability = pole.quantity("permeability", "1", default=NIFE_PERMEABILITY)
-        if permeability <= 0:
-            raise SpecError(f"pole.permeability: a relative permeability must be > 0, got {permeability:g}")
+        saturation = pole.quantity("saturation", "T", default=None)
         cells = pole.integer("cells", default=POLE_CELLS)
         rod_cells = _soft_grid("pole.cells", "cylinder", [diameter, length], cells, permeability)
         permeability = jnp.asarray(permeability)
+        saturation = None if saturation is None else jnp.asarray(saturation)
     pole.done()
     mechanics = Table(spec, "mechanics")
     mechanics.choice("model", ("tilt",))
@@ -422,6 +421,7 @@ def _pole_scene(spec, fidelity):
         pole_length=jnp.asarray(length),
         demagnetizing_factor=demag,
         permeability=permeability,
+        saturation=saturation,
         fidelity=level,
         rod_cells=rod_cells,
         spring=jnp.asarray(spring),

@@ -8,8 +8,8 @@ vector in its own frame: axial plus diametral parts), its pose an ``offset`` (m)
 centre and a rotation ``angles`` (rad, as a chip's, :mod:`magdesign.scene.pose`), and
 further magnets (``extra``, :class:`magdesign.scene.pose.Magnet`), carried with it or
 fixed, add their fields. Soft-magnetic parts (``soft``, :class:`magdesign.scene.pose.SoftPart`,
-the method of moments) are magnetised by the magnets and add their own fields; each part is
-solved in the magnets' field alone (parts do not magnetise one another).
+the method of moments) are magnetised by the magnets and by one another (one system of all
+their cells), and add their own fields.
 Sensors sit at given positions (a reference sensor at the origin for seed 001; a
 4 x 2 matrix for seed 002; four GMR at several depths for seed 003). A press moves
 the magnet by -z towards them (seed 002's chips move towards a fixed magnet: the
@@ -47,7 +47,7 @@ from jaxtyping import Array, Float
 from magdesign.scene.core import MECHANICS_CONVERGED, AbstractScene
 from magdesign.scene.effects import AbstractEffect, effect_output_units, effect_outputs
 from magdesign.scene.mechanics import AbstractMechanics
-from magdesign.scene.pose import Magnet, SoftPart, posed_cylinder, rotation
+from magdesign.scene.pose import Magnet, SoftPart, posed_cylinder, rotation, soft_parts_field
 from magdesign.transducers import add_noise, emf, slip_flags, Hall3D, SpinValve
 
 class SpinValveReadout(eqx.Module):
@@ -133,6 +133,14 @@ class MagnetScene(AbstractScene):
         }
         for name, get in self.mechanics.parameter_paths.items():
             paths[name] = lambda s, get=get: get(s.mechanics)
+        for i, part in enumerate(self.soft):
+            paths[f"soft[{i}].permeability"] = lambda s, i=i: s.soft[i].permeability
+            if part.saturation is not None:
+                paths[f"soft[{i}].saturation"] = lambda s, i=i: s.soft[i].saturation
+            for k in range(3):
+                paths[f"soft[{i}].position[{k}]"] = lambda s, i=i, k=k: s.soft[i].centre[k]
+            for k in range(len(part.size)):
+                paths[f"soft[{i}].size[{k}]"] = lambda s, i=i, k=k: s.soft[i].size[k]
         return paths
 
     @property
@@ -156,8 +164,8 @@ class MagnetScene(AbstractScene):
 
     def source_field(self, points, displacement):
         field = self.magnets_field(points, displacement)
-        for part in self.soft:
-            field = field + part.field(points, displacement, lambda x: self.magnets_field(x, displacement))
+        if self.soft:
+            field = field + soft_parts_field(self.soft, points, displacement, lambda x: self.magnets_field(x, displacement))
         return field
 
     def magnets_field(self, points, displacement):

@@ -30,7 +30,8 @@ it at the tip, and the thesis's FEM has a non-linear B-H curve (its Table 3.1 al
 its units). Treat absolute forces of this level as upper bounds; use it for trends.
 
 Method-of-moments level (``pole.fidelity = "moments"``, PHYSICS.md 1.3, issue 15): the
-rod is a linear soft body of relative permeability mu_r (``pole.permeability``) split
+rod is a soft body of relative permeability mu_r (``pole.permeability``; linear, or
+saturating at ``pole.saturation`` (T) by :mod:`magdesign.fields.soft`'s law) split
 into cuboid cells (:mod:`magdesign.fields.soft`, ``pole.cells`` along its length), its
 magnetisation solved self-consistently in the plate's field at every tilt, its own field
 added at the sensors, and the forces taken as derivatives of the magnetic co-energy
@@ -63,6 +64,7 @@ from magdesign.fields import cylinder, soft
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.magnet_scene import SpinValveReadout
+from magdesign.scene.pose import SoftPart, rotation, soft_parts_field
 from magdesign.units import MU0
 
 
@@ -71,18 +73,12 @@ def _charge_field(points, position, charge):
     return charge * r / (4.0 * jnp.pi * jnp.sum(r * r, axis=-1, keepdims=True) ** 1.5)
 
 
-def _turn_about_y(theta):
-    """Rotation (3, 3) taking the body's z axis to the rod's axis (-sin theta, 0, cos theta)."""
-    c, s = jnp.cos(theta), jnp.sin(theta)
-    zero, one = 0.0 * theta, 1.0 + 0.0 * theta
-    return jnp.array([[c, zero, -s], [zero, one, zero], [s, zero, c]])
-
-
 class PoleScene(AbstractScene):
     """Seed 000's suspension (see the module docstring); SI throughout.
 
     ``fidelity`` (static) is "reduced" (charges, ``demagnetizing_factor``) or "moments"
-    (the rod a soft body of ``permeability``, ``rod_cells`` = its grid (n_x, n_y, n_z)).
+    (the rod a soft body of ``permeability``, ``rod_cells`` = its grid (n_x, n_y, n_z),
+    ``saturation`` its J_s (T) or None: linear).
     """
 
     plate_radius: Float[Array, ""]
@@ -101,6 +97,7 @@ class PoleScene(AbstractScene):
     effects: tuple[AbstractEffect, ...]
     fidelity: str = eqx.field(static=True, default="reduced")
     rod_cells: tuple[int, int, int] | None = eqx.field(static=True, default=None)
+    saturation: Float[Array, ""] | None = None
 
     SOURCE_KEY = "magnet.remanence"
     reading_labels = ("V",)
@@ -119,6 +116,7 @@ class PoleScene(AbstractScene):
             "pole.length": lambda s: s.pole_length,
             **({"pole.demagnetizing_factor": lambda s: s.demagnetizing_factor} if self.fidelity == "reduced"
                else {"pole.permeability": lambda s: s.permeability}),
+            **({"pole.saturation": lambda s: s.saturation} if self.saturation is not None else {}),
             "mechanics.spring": lambda s: s.spring,
             "sensor.offset": lambda s: s.sensor_offset,
             "sensor.height": lambda s: s.sensor_height,
@@ -141,22 +139,29 @@ class PoleScene(AbstractScene):
     def rod(self):
         """The rod as a :class:`~magdesign.fields.soft.SoftBody` (moments level), in its
         own frame: centre at the origin, axis along z."""
+        return self._rod_part(0.0, jnp.zeros(3)).body
+
+    def _rod_part(self, theta, shift):
+        """The rod at tilt ``theta`` (rad), moved by ``shift`` (3,) (m), as a scene's soft
+        part: turned about y by theta, its axis (-sin theta, 0, cos theta) from the tip."""
         if self.fidelity != "moments":
             raise ValueError("the rod is a soft body at the moments level only (pole.fidelity = 'moments')")
-        return soft.soft_body("cylinder", jnp.stack([self.pole_diameter, self.pole_length]),
-                              cells=self.rod_cells, permeability=self.permeability)
+        angles = jnp.stack([0.0 * theta, theta, 0.0 * theta])
+        centre = self.tip(theta) + shift + 0.5 * self.pole_length * rotation(angles)[2]
+        return SoftPart(size=(self.pole_diameter, self.pole_length), permeability=self.permeability,
+                        centre=tuple(centre), angles=angles, shape="cylinder", grid=self.rod_cells,
+                        saturation=self.saturation)
 
     def _rod_pose(self, theta, shift):
-        """The rod's centre (3,) (m) and rotation (3, 3) at tilt ``theta`` (rad), moved by
-        ``shift`` (3,) (m)."""
-        turn = _turn_about_y(theta)
-        return self.tip(theta) + shift + 0.5 * self.pole_length * turn[:, 2], turn
+        """The rod's centre (3,) (m) and turn (3, 3) (v_scene = turn v_body) at tilt
+        ``theta`` (rad), moved by ``shift`` (3,) (m)."""
+        part = self._rod_part(theta, shift)
+        return jnp.stack(part.centre), rotation(part.angles).T
 
     def _rod_external(self, theta, shift):
         """The plate's field at the rod's cells in the rod's frame (N, 3) (T)."""
-        rod = self.rod
         centre, turn = self._rod_pose(theta, shift)
-        return self.plate_field(centre + rod.centres @ turn.T) @ turn
+        return self.plate_field(centre + self.rod.centres @ turn.T) @ turn
 
     def coenergy(self, theta, shift=None):
         """The rod's magnetic co-energy W' (J) in the plate's field at tilt ``theta`` (rad),
@@ -194,12 +199,8 @@ class PoleScene(AbstractScene):
 
     def source_field(self, points, displacement):
         if self.fidelity == "moments":
-            theta = self.tilt(displacement)
-            rod = self.rod
-            centre, turn = self._rod_pose(theta, jnp.zeros(3))
-            magnetization = soft.magnetization(rod, self._rod_external(theta, jnp.zeros(3)))
-            own = soft.field(rod, magnetization, (points - centre) @ turn) @ turn.T
-            return self.plate_field(points) + own
+            rod = self._rod_part(self.tilt(displacement), jnp.zeros(3))
+            return self.plate_field(points) + soft_parts_field((rod,), points, jnp.zeros(3), self.plate_field)
         # one plate-field evaluation for the points and the rod's tip (one compiled kernel)
         tip = self.tip(0.0) + displacement
         flat = points.reshape(-1, 3)

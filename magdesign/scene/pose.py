@@ -13,6 +13,7 @@ is the frame of :func:`magdesign.fields.cylinder` (centre at the origin, axis z)
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign.fields import cylinder, soft
@@ -70,35 +71,49 @@ class Magnet(eqx.Module):
 
 
 class SoftPart(eqx.Module):
-    """A linear soft-magnetic part of a scene (``[[soft]]``; :mod:`magdesign.fields.soft`):
-    its ``shape`` (static) and ``size`` (m, as :func:`~magdesign.fields.soft.soft_body`),
-    relative ``permeability``, ``centre`` (3,) (m, scene frame, at rest), ``angles`` (3,)
+    """A soft-magnetic part of a scene (``[[soft]]``; :mod:`magdesign.fields.soft`): its
+    ``shape`` (static) and ``size`` (lengths, m, as :func:`~magdesign.fields.soft.soft_body`),
+    relative ``permeability``, ``centre`` (x, y, z) (m, scene frame, at rest), ``angles`` (3,)
     (rad, as a magnet's), ``grid`` (static) its cells along x, y, z; ``moves`` (static):
-    carried by the load with the magnet, or fixed in the scene."""
+    carried by the load with the magnet, or fixed in the scene; ``saturation`` (T, J_s) or
+    None for a linear part. Sizes and centre are scalars each, so a design can set one free."""
 
-    size: Float[Array, "..."]
+    size: tuple[Float[Array, ""], ...]
     permeability: Float[Array, ""]
-    centre: Float[Array, "3"]
+    centre: tuple[Float[Array, ""], Float[Array, ""], Float[Array, ""]]
     angles: Float[Array, "3"]
     shape: str = eqx.field(static=True)
     grid: tuple[int, int, int] = eqx.field(static=True)
     moves: bool = eqx.field(static=True, default=False)
+    saturation: Float[Array, ""] | None = None
 
     @property
     def body(self) -> soft.SoftBody:
-        return soft.soft_body(self.shape, self.size, cells=self.grid, permeability=self.permeability)
+        return soft.soft_body(self.shape, jnp.stack(self.size), cells=self.grid, permeability=self.permeability,
+                              saturation=self.saturation)
 
-    def field(self, points, displacement, magnets):
-        """The part's own flux density (T, scene frame) at ``points`` (m, scene frame), with
-        the load's ``displacement`` (m), magnetised by ``magnets``: a function from points
-        (..., 3) (m, scene frame) to the permanent magnets' B (T) there."""
-        body = self.body
-        centre = self.centre + displacement if self.moves else self.centre
-        matrix = rotation(self.angles)  # v_body = matrix v_scene
-        external = to_chip(matrix, magnets(centre + body.centres @ matrix))
-        magnetization = soft.magnetization(body, external)
-        own = soft.field(body, magnetization, to_chip(matrix, jnp.asarray(points) - centre))
-        return jnp.einsum("ji,...j->...i", matrix, own)
+    def position(self, displacement):
+        """The part's centre (3,) (m, scene frame) with the load's ``displacement`` (m)."""
+        centre = jnp.stack(self.centre)
+        return centre + displacement if self.moves else centre
+
+
+def soft_parts_field(parts, points, displacement, magnets):
+    """The soft ``parts``' own flux density (T, scene frame) at ``points`` (m, scene frame),
+    with the load's ``displacement`` (m), magnetised by ``magnets`` (a function from points
+    (..., 3) (m, scene frame) to the permanent magnets' B (T) there) and by one another."""
+    bodies = [part.body for part in parts]
+    centres = [part.position(displacement) for part in parts]
+    matrices = [rotation(part.angles) for part in parts]  # v_body = matrix v_scene
+    cells = [centre + body.centres @ matrix for body, centre, matrix in zip(bodies, centres, matrices)]
+    at_cells = jnp.split(magnets(jnp.concatenate(cells)), np.cumsum([len(c) for c in cells])[:-1])
+    externals = [to_chip(matrix, field) for matrix, field in zip(matrices, at_cells)]
+    magnetizations = soft.coupled_magnetization(bodies, centres, matrices, externals)
+    points = jnp.asarray(points)
+    return sum(
+        jnp.einsum("ji,...j->...i", matrix, soft.field(body, magnetization, to_chip(matrix, points - centre)))
+        for body, magnetization, centre, matrix in zip(bodies, magnetizations, centres, matrices)
+    )
 
 
 def grid_positions(shape: tuple[int, int], pitch) -> Float[Array, "s 3"]:

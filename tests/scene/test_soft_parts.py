@@ -11,9 +11,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from magdesign.design.spec import default_spec
+from magdesign.design import solve
+from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.fields import soft
-from magdesign.scene import scene_from_spec
+from magdesign.scene import scene_from_spec, with_parameters
+from magdesign.scene._spec import parameter_unit
 from magdesign.scene.pose import rotation
 from magdesign.units import MU0, SpecError
 
@@ -85,6 +87,8 @@ def test_a_part_carried_by_the_load_moves_with_the_magnet():
     ({"size": ["1 mm", "1 mm"]}, "soft\\[0\\].size"),
     ({"size": ["1 mm", "-1 mm", "1 mm"]}, "soft\\[0\\].size"),
     ({"permeability": 0}, "soft\\[0\\].permeability"),
+    ({"saturation": "0 T"}, "soft\\[0\\].saturation"),
+    ({"saturation": "2 mm"}, "soft\\[0\\].saturation"),
     ({"position": ["1 T", "0 mm", "0 mm"]}, "soft\\[0\\].position"),
     ({"colour": "grey"}, "colour"),
 ])
@@ -104,3 +108,56 @@ def test_soft_parts_need_the_exact_field_and_a_cylinder_magnet():
     film["soft"] = [PLATE]
     with pytest.raises(SpecError, match="soft"):
         scene_from_spec(film)
+
+
+def test_parts_magnetise_one_another():
+    """A second plate near the first changes the field by more than its own field alone
+    does (the two magnetise one another); a second plate a metre away changes nothing."""
+    points, rest = jnp.zeros((1, 3)), jnp.zeros(3)
+    near = {**PLATE, "position": ["0 mm", "0 mm", "-1.8 mm"], "cells": 6}
+    first = {**PLATE, "cells": 6}
+    alone = [float(field(scene_from_spec(spec_with(part)), points, rest)[0, 2]) for part in (first, near)]
+    bare = float(field(scene_from_spec(spec_with()), points, rest)[0, 2])
+    both = float(field(scene_from_spec(spec_with(first, near)), points, rest)[0, 2])
+    independent = alone[0] + alone[1] - bare  # each part magnetised by the magnet alone
+    assert abs(both / independent - 1) > 0.02, (both, independent)
+    far = {**near, "position": ["0 mm", "0 mm", "-1000 mm"]}
+    with_far = float(field(scene_from_spec(spec_with(first, far)), points, rest)[0, 2])
+    assert abs(with_far / alone[0] - 1) < 1e-9
+
+
+def test_a_saturating_part_gives_less_than_the_linear_one():
+    """A plate whose J_s is below what the magnet would drive it to: the gain over the bare
+    magnet shrinks; a J_s far above changes nothing."""
+    points, rest = jnp.zeros((1, 3)), jnp.zeros(3)
+    bare = float(field(scene_from_spec(spec_with()), points, rest)[0, 2])
+    linear = float(field(scene_from_spec(spec_with(PLATE)), points, rest)[0, 2])
+    weak = float(field(scene_from_spec(spec_with({**PLATE, "saturation": "0.5 mT"})), points, rest)[0, 2])
+    strong = float(field(scene_from_spec(spec_with({**PLATE, "saturation": "10 T"})), points, rest)[0, 2])
+    assert bare < weak < bare + 0.8 * (linear - bare)
+    assert abs(strong / linear - 1) < 1e-6
+
+
+def test_a_design_places_a_soft_back_plate():
+    """The plate's depth as a design variable (soft[0].position[2], read in m): the solve
+    reaches a wanted rest field that lies between the far and the near plate's, and the
+    scene at the answer gives it."""
+    spec = spec_with({**PLATE, "size": ["10 mm", "10 mm", "0.5 mm"], "cells": 4})
+    spec["mechanics"]["fidelity"] = "reissner"
+    spec["load"] = {"normal": ["0 N", "5 N"], "points": 2}
+    spec["scene"] = {"effects": []}
+    spec["design"] = {
+        "variables": {"soft[0].position[2]": {"lower": "-6 mm", "upper": "-0.5 mm", "start": "-3 mm"}},
+        "targets": {"field_rest": "2.9 mT"},
+    }
+    assert parameter_unit("soft[0].position[2]") == "m" and parameter_unit("soft[0].saturation") == "T"
+    problem, scene = problem_from_spec(spec)
+    points, rest = jnp.zeros((1, 3)), jnp.zeros(3)
+    ends = [float(field(with_parameters(scene, {"soft[0].position[2]": z}), points, rest)[0, 2]) for z in (-6e-3, -0.5e-3)]
+    assert ends[0] < 2.9e-3 < ends[1]
+    result = solve(problem)
+    assert str(result.status) == "successful", result.status
+    depth = float(result.parameters["soft[0].position[2]"])
+    assert -6e-3 < depth < -0.5e-3
+    at_answer = float(field(with_parameters(scene, {"soft[0].position[2]": depth}), points, rest)[0, 2])
+    assert abs(at_answer / 2.9e-3 - 1) < 1e-8
