@@ -232,12 +232,12 @@ def safe_atan2(y, x):
 DESIGN_START_NUDGE = 1e-3
 
 
-# Saturating soft bodies (fields.soft): Levenberg-Marquardt on the cells' polarisation J
-# (T) stops on steps below SATURATION_RTOL |J| + SATURATION_ATOL; the answer counts as
-# converged only where the residual's largest entry is below SATURATION_RESIDUAL (T). Its
-# rounding is about chi eps |J| (chi up to ~1e4, |J| up to ~2 T: ~4e-12 T). Measured: 9-17
-# steps on a sphere of mu_r 300 from the linear to the deeply saturated regime.
-SATURATION_RTOL = 1e-10
-SATURATION_ATOL = 1e-10
+# Saturating soft bodies (fields.soft): Newton's method on the cells' polarisation J (T)
+# with a backtracking line search, stopped when the residual's largest entry is below
+# SATURATION_RESIDUAL (T). Its rounding is about chi eps |J| (chi up to ~1e4, |J| up to
+# ~2 T: ~4e-12 T). A step is halved until |r|^2 falls by SATURATION_ARMIJO times the
+# step's fraction (Armijo's sufficient decrease), down to SATURATION_SHORTEST_STEP.
 SATURATION_RESIDUAL = 1e-9
 SATURATION_MAX_STEPS = 100
+SATURATION_ARMIJO = 1e-4
+SATURATION_SHORTEST_STEP = 2.0**-30

@@ -255,7 +255,7 @@ def _saturated_sphere(chi, saturation, applied):
     for _ in range(200):
         middle = 0.5 * (low + high)
         h = applied - middle / 3.0
-        if middle < chi * h / np.sqrt(1.0 + (chi * h / saturation) ** 2):
+        if middle < float(soft.law(jnp.array([0.0, 0.0, h]), chi, saturation)[2]):
             low = middle
         else:
             high = middle

@@ -247,7 +247,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
                 raise SpecError(f"{where}.{key}: missing bound; expected a quantity in {shown}")
         for key, value in values.items():
             if key != "scale":
-                check_domain(name, value, key=f"{where}.{key}")
+                check_domain(name, value, key=f"{where}.{key}", unit=parameter_unit(name))
         with _named(where):
             variables.append(Variable(name, unit=None if shown == "1" else shown, **values))
 

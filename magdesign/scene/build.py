@@ -230,6 +230,14 @@ def _soft_grid(key, shape, size, cells, permeability):
         raise SpecError(f"{key}: {error}") from None
 
 
+def _saturation(table, name, permeability):
+    """A soft body's optional saturation polarisation J_s (T), or None (linear)."""
+    saturation = table.quantity("saturation", "T", default=None)
+    if saturation is not None and permeability <= 1.0:
+        raise SpecError(f"{name}.saturation: a saturating body needs {name}.permeability > 1, got {permeability:g}")
+    return None if saturation is None else jnp.asarray(saturation)
+
+
 def _soft_parts(spec):
     """[[soft]]: soft-magnetic parts (method of moments), each at its centre (scene frame)
     and rotation, fixed unless ``moves = true``, linear unless it gives a ``saturation``."""
@@ -239,8 +247,7 @@ def _soft_parts(spec):
         count = SIZE_LENGTHS[shape]
         size = table.quantities("size", "m", length=count) if count > 1 else [table.quantity("size", "m")]
         permeability = table.quantity("permeability", "1")
-        saturation = table.quantity("saturation", "T", default=None)
-        saturation = None if saturation is None else jnp.asarray(saturation)
+        saturation = _saturation(table, name, permeability)
         grid = _soft_grid(f"{name}.cells", shape, size, table.integer("cells", default=SOFT_CELLS), permeability)
         parts.append(SoftPart(size=tuple(jnp.asarray(v) for v in size), permeability=jnp.asarray(permeability),
                               centre=tuple(centre), angles=angles, shape=shape, grid=grid, moves=moves,
@@ -392,11 +399,10 @@ def _pole_scene(spec, fidelity):
         demag = jnp.asarray(pole.quantity("demagnetizing_factor", "1"))
     else:
         permeability = pole.quantity("permeability", "1", default=NIFE_PERMEABILITY)
-        saturation = pole.quantity("saturation", "T", default=None)
+        saturation = _saturation(pole, "pole", permeability)
         cells = pole.integer("cells", default=POLE_CELLS)
         rod_cells = _soft_grid("pole.cells", "cylinder", [diameter, length], cells, permeability)
         permeability = jnp.asarray(permeability)
-        saturation = None if saturation is None else jnp.asarray(saturation)
     pole.done()
     mechanics = Table(spec, "mechanics")
     mechanics.choice("model", ("tilt",))

@@ -64,7 +64,7 @@ from magdesign.fields import cylinder, soft
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.magnet_scene import SpinValveReadout
-from magdesign.scene.pose import SoftPart, rotation, soft_parts_field
+from magdesign.scene.pose import SoftPart, rotation, soft_parts_field, soft_parts_frames
 from magdesign.units import MU0
 
 
@@ -160,8 +160,7 @@ class PoleScene(AbstractScene):
 
     def _rod_external(self, theta, shift):
         """The plate's field at the rod's cells in the rod's frame (N, 3) (T)."""
-        centre, turn = self._rod_pose(theta, shift)
-        return self.plate_field(centre + self.rod.centres @ turn.T) @ turn
+        return soft_parts_frames((self._rod_part(theta, shift),), jnp.zeros(3), self.plate_field)[3][0]
 
     def coenergy(self, theta, shift=None):
         """The rod's magnetic co-energy W' (J) in the plate's field at tilt ``theta`` (rad),

@@ -76,7 +76,8 @@ class SoftPart(eqx.Module):
     relative ``permeability``, ``centre`` (x, y, z) (m, scene frame, at rest), ``angles`` (3,)
     (rad, as a magnet's), ``grid`` (static) its cells along x, y, z; ``moves`` (static):
     carried by the load with the magnet, or fixed in the scene; ``saturation`` (T, J_s) or
-    None for a linear part. Sizes and centre are scalars each, so a design can set one free."""
+    None for a linear part. Sizes and centre are scalars each, so a design can set one free
+    (the grid stays: a design that grows a part stretches its cells)."""
 
     size: tuple[Float[Array, ""], ...]
     permeability: Float[Array, ""]
@@ -98,16 +99,24 @@ class SoftPart(eqx.Module):
         return centre + displacement if self.moves else centre
 
 
+def soft_parts_frames(parts, displacement, magnets):
+    """Each part's body, centre (3,) (m, scene frame), rotation (3, 3) (v_body = matrix
+    v_scene) and the permanent magnets' B (T) at its cells in its own frame, (N_b, 3);
+    ``displacement`` (m) the load's, ``magnets`` as in :func:`soft_parts_field` (called
+    once, on every part's cells)."""
+    bodies = [part.body for part in parts]
+    centres = [part.position(displacement) for part in parts]
+    matrices = [rotation(part.angles) for part in parts]
+    cells = [centre + body.centres @ matrix for body, centre, matrix in zip(bodies, centres, matrices)]
+    at_cells = jnp.split(magnets(jnp.concatenate(cells)), np.cumsum([len(c) for c in cells])[:-1])
+    return bodies, centres, matrices, [to_chip(matrix, field) for matrix, field in zip(matrices, at_cells)]
+
+
 def soft_parts_field(parts, points, displacement, magnets):
     """The soft ``parts``' own flux density (T, scene frame) at ``points`` (m, scene frame),
     with the load's ``displacement`` (m), magnetised by ``magnets`` (a function from points
     (..., 3) (m, scene frame) to the permanent magnets' B (T) there) and by one another."""
-    bodies = [part.body for part in parts]
-    centres = [part.position(displacement) for part in parts]
-    matrices = [rotation(part.angles) for part in parts]  # v_body = matrix v_scene
-    cells = [centre + body.centres @ matrix for body, centre, matrix in zip(bodies, centres, matrices)]
-    at_cells = jnp.split(magnets(jnp.concatenate(cells)), np.cumsum([len(c) for c in cells])[:-1])
-    externals = [to_chip(matrix, field) for matrix, field in zip(matrices, at_cells)]
+    bodies, centres, matrices, externals = soft_parts_frames(parts, displacement, magnets)
     magnetizations = soft.coupled_magnetization(bodies, centres, matrices, externals)
     points = jnp.asarray(points)
     return sum(

@@ -167,3 +167,24 @@ def test_moments_spec_errors_name_the_key():
     spec["pole"]["cells"] = 200  # 200 x 60 x 60 cells: more than a dense solve holds
     with pytest.raises(SpecError, match="pole.cells"):
         scene_from_spec(spec)
+
+
+def test_a_saturating_rod():
+    """[pole] saturation: the rod's cells stay below J_s where the linear solve passes it,
+    the key is a design parameter, and bad values name the key."""
+    spec = example("pole_plate")
+    linear = scene_from_spec(spec)
+    spec["pole"]["saturation"] = "0.05 T"
+    scene = scene_from_spec(spec)
+    assert "pole.saturation" in scene.parameter_paths and "pole.saturation" not in linear.parameter_paths
+    peaks = [MU0 * float(np.linalg.norm(soft.magnetization(s.rod, s._rod_external(0.0, np.zeros(3))), axis=-1).max())
+             for s in (linear, scene)]
+    assert peaks[0] > 0.1 and peaks[1] < 0.05, peaks
+    for value, match in (("0 T", "pole.saturation"), ("1 mm", "pole.saturation")):
+        spec["pole"]["saturation"] = value
+        with pytest.raises(SpecError, match=match):
+            scene_from_spec(spec)
+    spec["pole"]["saturation"] = "0.8 T"
+    spec["pole"]["permeability"] = 1
+    with pytest.raises(SpecError, match="pole.saturation"):
+        scene_from_spec(spec)

@@ -89,6 +89,7 @@ def test_a_part_carried_by_the_load_moves_with_the_magnet():
     ({"permeability": 0}, "soft\\[0\\].permeability"),
     ({"saturation": "0 T"}, "soft\\[0\\].saturation"),
     ({"saturation": "2 mm"}, "soft\\[0\\].saturation"),
+    ({"saturation": "1 T", "permeability": 1}, "soft\\[0\\].saturation"),
     ({"position": ["1 T", "0 mm", "0 mm"]}, "soft\\[0\\].position"),
     ({"colour": "grey"}, "colour"),
 ])
