@@ -33,6 +33,7 @@ from _report import Report, arguments, progress
 from magdesign._numerics import TILT_DIFFERENCE_STEP
 from magdesign.fields import cuboid, soft
 from magdesign.scene import loads_from_spec, outputs, parameters, scene_from_spec, with_parameters
+from magdesign.scene.pose import posed_cylinder, rotation
 from magdesign.units import MU0, deg, mm, mT
 
 uN = 1e-6
@@ -58,6 +59,7 @@ AIM_ANGLE = 1 * deg
 SENS_PM = 0.3 * mT / deg  # abstract; Sec. 3.2.4, Fig. 3.9: magnet soleplate, Hall pair at +-0.5 mm
 SENS_NIFE = 2.0 * mT / deg  # same: Ni-Fe soleplate, Hall pair at +-1 mm
 HALL_X = 0.5 * mm  # the magnet soleplate's pair
+HALL_X_NIFE = 1.0 * mm  # the Ni-Fe soleplate's pair
 HALL_HEIGHT = 0.1 * mm  # Sec. 3.2.3 / Fig. 3.8: the field is read 0.1 mm above the plate
 SENS_SPAN = 10 * deg  # Sec. 3.2.4: the difference is taken over a 10 deg turn
 GMR_VOLTS_PER_AM = 0.131e-3  # Sec. 4.3, Fig. 4.7: 0.131 mV per A/m at 0.6 V bias
@@ -78,6 +80,9 @@ POLE_DIAMETERS = tuple(d * mm for d in (0.15, 0.3, 0.6, 1.2))  # the analysed po
 CELLS = (8, 12, 16, 24, 32)  # full mode's convergence (pole.cells); the finest is the reference
 PLANAR_DEPTHS = (10 * mm, 20 * mm)  # the planar model's two depths (their difference removes the ends)
 PLANAR_GRID = (4, 24, 16)  # its cells across, along the depth, along the rod
+# Condition 1 ("vice versa", Sec. 2.2): the pole a permanent magnet (the rod's size, magnetised
+# along its axis at the plate's Hc) over a Ni-Fe soleplate of the magnet plate's size (assumed).
+SOLEPLATE_CELLS = 20  # along the soleplate's diameter (2 through its 1 mm)
 # Readings of Table 3.1's lost unit: (label, SI value of one unit, a torque per ball radius?)
 UNIT_READINGS = (("uN/deg", uN / deg, False), ("uN/rad", uN, False), ("mN/deg", 1e-3 / deg, False),
                  ("mN/rad", 1e-3, False), ("uN m/deg (torque)", uN / deg, True), ("mN m/rad (torque)", 1e-3, True))
@@ -117,6 +122,47 @@ def fields(scene, thetas, points):
     """The field (T) at ``points`` at each tilt, rod and plate (one tilt at a time: the
     rod's own field is costly in memory)."""
     return jax.lax.map(lambda t: scene.source_field(points, scene.tip(t) - scene.tip(0.0)), thetas)
+
+
+def soleplate(p, lengths):
+    """Condition 1 at the moments level, for each pole length (m) in ``lengths`` (name:
+    length): a magnet rod (the pole's diameter, that length from the tip up, polarisation
+    mu0 Hc along its axis) in the ball over a Ni-Fe soleplate (mu_r of the pole, the magnet
+    plate's radius and thickness, top face at z = 0). The co-energy of the plate in the rod's
+    field gives k = -W''(0) / r_b (five-point differences, as the library's pole); the Hall
+    pair at +-HALL_X_NIFE reads the rod's and the plate's B_z."""
+    plate = soft.soft_body("cylinder", [2 * p["magnet.radius"], p["magnet.height"]], cells=SOLEPLATE_CELLS,
+                           permeability=p["pole.permeability"])
+    below = jnp.array([0.0, 0.0, -0.5]) * p["magnet.height"]
+    ball = jnp.array([0.0, 0.0, p["geometry.gap"] + p["pole.ball_radius"]])
+    probes = jnp.array([[HALL_X_NIFE, 0.0, HALL_HEIGHT], [-HALL_X_NIFE, 0.0, HALL_HEIGHT]])
+
+    def at(theta, length):
+        angles = jnp.stack([0.0 * theta, theta, 0.0 * theta])
+        tip = ball + p["pole.ball_radius"] * jnp.stack([jnp.sin(theta), 0.0 * theta, -jnp.cos(theta)])
+        centre = tip + 0.5 * length * rotation(angles)[2]
+
+        def rod(points):
+            return posed_cylinder(points, centre=centre, angles=angles, radius=p["pole.diameter"] / 2, height=length,
+                                  polarization=p["magnet.remanence"])
+
+        external = rod(below + plate.centres)
+        magnetization = soft.magnetization(plate, external)
+        field = rod(probes) + soft.field(plate, magnetization, probes - below)
+        return soft.coenergy(plate, external), field[:, 2], MU0 * jnp.max(jnp.linalg.norm(magnetization, axis=-1))
+
+    # five tilts for the spring, then the sensitivity's span; one program for every length
+    thetas = jnp.asarray(np.append(TILT_DIFFERENCE_STEP * np.arange(-2.0, 3.0), SENS_SPAN))
+    sweep = jax.jit(jax.vmap(at, in_axes=(0, None)))
+    second = np.array([-1.0, 16.0, -30.0, 16.0, -1.0]) / (12.0 * TILT_DIFFERENCE_STEP**2)
+    results = {}
+    for name, length in lengths.items():
+        energy, bz, peak = (np.asarray(a) for a in sweep(thetas, length))
+        pair = bz[:, 0] - bz[:, 1]
+        results[name] = {"spring_coefficient": -float(second @ energy[:5]) / p["pole.ball_radius"],
+                         "hall_pair_sensitivity": float(pair[5] - pair[2]) / SENS_SPAN, "peak_polarization": float(peak.max()),
+                         "cells": len(plate.index)}
+    return results
 
 
 def spring_at_rest(scene):
@@ -242,6 +288,8 @@ def main(argv=None):
     by_plate = [variant({"magnet.radius": r}) for r in PLATE_RADII]
     initial = [variant({**INITIAL, "magnet.radius": r}) for r in INITIAL_MAGNET_RADII]
     progress("variants done")
+    progress(f"condition 1: a magnet pole over a Ni-Fe soleplate ({SOLEPLATE_CELLS} cells across)")
+    nife = soleplate(p, {"full": p["pole.length"], "half": p["pole.ball_radius"]})
 
     if not args.quick:
         progress("library outputs at the moments level (exact values, five-point differences)")
@@ -294,8 +342,11 @@ def main(argv=None):
     checked = "; ".join(f"{name} x{value:.3g}" for name, value in best.items())
     # the GMR preset's reading per A/m of H along its axis, at rest (its own linear law)
     gmr_gain = float(jax.jacfwd(lambda b: scene.transduce(b)[0, 0, 0])(jnp.zeros((1, 1, 3)))[0, 0, 0]) * MU0
-    not_modelled = ("the scene's plate is a permanent magnet under a soft pole; a soft soleplate under a magnetised pole "
-                    "(the thesis's condition 1) is not a PoleScene")
+    soleplate_note = (f"Condition 1 as read here (Sec. 2.2, 'vice versa'): the pole a magnet rod of the Ni-Fe rod's size, "
+                      f"magnetised along its axis at Hc = 200 kA/m, over a Ni-Fe soleplate (mu_r {p['pole.permeability']:g}) of "
+                      f"the magnet plate's size; both sizes assumed, the plate's cells "
+                      f"{nife['full']['cells']} ({SOLEPLATE_CELLS} across, coarse), largest mu0 M in it "
+                      f"{nife['full']['peak_polarization']:.2g} T (below Ni-Fe's {NIFE_SATURATION:g} T)")
     rows = [
         row("linear_range", "linear range of F(theta), magnet soleplate, full pole", "+-40 deg", "abstract; Sec. 3.2.2, Fig. 3.5",
             f"moments: +-{moments['linear_range'] / deg:.1f} deg within {LINEARITY:.0%} of k theta, F peaks at "
@@ -333,10 +384,26 @@ def main(argv=None):
             "Sec. 3.2.5, Fig. 3.10; Ch. 5", f"moments: {sens(moments['gmr_field_sensitivity'])} at {p['sensor.offset'] / mm:g} mm; "
             f"reduced: {sens(charge['gmr_field_sensitivity'])}", f"{ratio(abs(moments['gmr_field_sensitivity']), SENS_PM)} (offset lost)",
             None, "the thesis gives the GMR's best offset and value only in a lost figure; it says it equals the Hall pair's"),
-        row("sensitivity_nife", "sensitivity, Ni-Fe soleplate, Hall pair at +-1 mm", "2 mT/deg", "abstract; Sec. 3.2.4, Fig. 3.9",
-            "not modelled", "not compared", None, not_modelled),
-        row("k_nife", "spring coefficient k, Ni-Fe soleplate, half / full pole", "0.639 / 0.215 uN/deg", "Table 3.1",
-            "not modelled", "not compared", None, not_modelled),
+        row("sensitivity_nife", "sensitivity, Ni-Fe soleplate (condition 1), Hall pair at +-1 mm", "2 mT/deg",
+            "abstract; Sec. 3.2.4, Fig. 3.9", f"moments: {sens(nife['full']['hall_pair_sensitivity'])} (B_z pair over 0..10 deg)",
+            ratio(abs(nife["full"]["hall_pair_sensitivity"]), SENS_NIFE), inside(abs(nife["full"]["hall_pair_sensitivity"]), SENS_NIFE),
+            f"tolerance x{FACTOR:g}. {soleplate_note}"),
+        row("k_nife", "spring coefficient k, Ni-Fe soleplate (condition 1), half / full pole", "0.639 / 0.215 uN/deg", "Table 3.1",
+            f"moments: {per_deg(nife['half']['spring_coefficient'])} / {per_deg(nife['full']['spring_coefficient'])}",
+            f"{ratio(nife['half']['spring_coefficient'], K_NIFE_HALF)} / {ratio(nife['full']['spring_coefficient'], K_NIFE_FULL)}",
+            inside(nife["full"]["spring_coefficient"], K_NIFE_FULL),
+            "known gap, as the magnet soleplate's (the table's unit is lost); the ratio below has no unit. Condition 1 as "
+            "in the row above"),
+        row("k_nife_over_pm", "k(Ni-Fe soleplate) / k(magnet soleplate), full pole", f"{K_NIFE_FULL / K_PM_FULL:.3g}", "Table 3.1",
+            f"{nife['full']['spring_coefficient'] / k:.3g}", ratio(nife["full"]["spring_coefficient"] / k, K_NIFE_FULL / K_PM_FULL),
+            inside(nife["full"]["spring_coefficient"] / k, K_NIFE_FULL / K_PM_FULL),
+            f"tolerance x{FACTOR:g}; free of Table 3.1's lost unit, and of Hc (both k scale as Hc^2). Condition 1 as above"),
+        row("sensitivity_nife_over_pm", "sensitivity, Ni-Fe soleplate (+-1 mm) / magnet soleplate (+-0.5 mm)",
+            f"{SENS_NIFE / SENS_PM:.3g}", "abstract; Sec. 3.2.4",
+            f"{abs(nife['full']['hall_pair_sensitivity'] / moments['hall_pair_sensitivity']):.3g}",
+            ratio(abs(nife["full"]["hall_pair_sensitivity"] / moments["hall_pair_sensitivity"]), SENS_NIFE / SENS_PM),
+            inside(abs(nife["full"]["hall_pair_sensitivity"] / moments["hall_pair_sensitivity"]), SENS_NIFE / SENS_PM),
+            f"tolerance x{FACTOR:g}; free of Hc (both fields scale as Hc). Condition 1 as above"),
         row("initial_force", "restoring force at 10 deg, initial model (Fe, mu_r 300, gap 0.8 mm)", "12.57 uN", "Sec. 3.1.1, Fig. 3.3",
             f"moments: {initial_text} uN for pole magnets of diameter {magnets} mm", f"x{initial[0]['force_at_10deg'] / INITIAL_FORCE:.3g} "
             f"to x{initial[-1]['force_at_10deg'] / INITIAL_FORCE:.3g}", None,
@@ -367,8 +434,8 @@ def main(argv=None):
         f"- Sensors: the Hall pair at +-{HALL_X / mm:g} mm, {HALL_HEIGHT / mm:g} mm above the plate (Fig. 3.8), differenced over a "
         f"{SENS_SPAN / deg:g} deg turn from rest (Sec. 3.2.4); the example's GMR (B_x) at {p['sensor.offset'] / mm:g} mm, "
         f"{p['sensor.height'] / mm:g} mm high (the thesis's offset is lost).\n"
-        f"- Not modelled: the Ni-Fe soleplate ({not_modelled}); gravity "
-        f"(weighed below); the plastic ball (non-magnetic)."
+        f"- The Ni-Fe soleplate (condition 1): {soleplate_note}; its pair at +-{HALL_X_NIFE / mm:g} mm.\n"
+        f"- Not modelled: gravity (weighed below); the plastic ball (non-magnetic)."
     )
 
     report.heading("Restoring force against tilt")
@@ -553,6 +620,7 @@ def main(argv=None):
     report.result("moments", summary(moments))
     report.result("reduced", summary(charge))
     report.result("half_pole", summary(half))
+    report.result("nife_soleplate", nife)
     report.result("pole_diameters", {"diameter": POLE_DIAMETERS, "levels": [summary(v) for v in by_diameter],
                                      "saturated": {f"{d / mm:g} mm": {"spring_coefficient": k, "peak_polarization": peak}
                                                    for d, (k, peak) in saturated.items()}})

@@ -17,6 +17,8 @@ UN_PER_DEG = UN / DEG
 K_PM_FULL, K_PM_HALF = 0.068 * UN_PER_DEG, 0.215 * UN_PER_DEG
 LINEAR_RANGE = 40 * DEG
 SENS_PM = 0.3 * MT / DEG
+SENS_NIFE = 2.0 * MT / DEG  # Ni-Fe soleplate (condition 1), Hall pair at +-1 mm
+K_NIFE_FULL = 0.215 * UN_PER_DEG
 INITIAL_FORCE, AIM_FORCE = 12.57 * UN, 1 * UN
 GMR_VOLTS_PER_AM = 0.131e-3
 # every published number issue 12 lists for this sensor, and the initial model's design rule
@@ -124,5 +126,22 @@ def test_verdicts_follow_the_published_values_and_tolerances(results):
     assert verdicts["k_half_over_full"] is within(k_half / k, K_PM_HALF / K_PM_FULL)
     assert verdicts["sensitivity_pm"] is within(results["moments"]["hall_pair_sensitivity"], SENS_PM)
     assert verdicts["linear_range"] is (abs(results["moments"]["linear_range"] - LINEAR_RANGE) <= 5 * DEG)
-    for key in ("sensitivity_nife", "k_nife", "gmr_field", "initial_force", "design_rule"):
+    nife = results["nife_soleplate"]["full"]
+    assert verdicts["sensitivity_nife"] is within(abs(nife["hall_pair_sensitivity"]), SENS_NIFE)
+    assert verdicts["k_nife"] is within(nife["spring_coefficient"], K_NIFE_FULL)
+    assert verdicts["k_nife_over_pm"] is within(nife["spring_coefficient"] / k, K_NIFE_FULL / K_PM_FULL)
+    assert verdicts["sensitivity_nife_over_pm"] is within(
+        abs(nife["hall_pair_sensitivity"] / results["moments"]["hall_pair_sensitivity"]), SENS_NIFE / SENS_PM)
+    for key in ("gmr_field", "initial_force", "design_rule"):
         assert verdicts[key] is None, key
+
+
+def test_the_ni_fe_soleplate_restores_and_stays_linear(results):
+    """Condition 1 (a magnet pole over a Ni-Fe soleplate): the plate pulls the pole back
+    (k > 0) for both poles, the pair reads the tilt, and the plate stays far below Ni-Fe's
+    saturation, where its linear level holds."""
+    for pole in ("full", "half"):
+        level = results["nife_soleplate"][pole]
+        assert level["spring_coefficient"] > 0
+        assert abs(level["hall_pair_sensitivity"]) > 0
+        assert level["peak_polarization"] < 0.5 * NIFE_SATURATION
