@@ -319,7 +319,7 @@ def _solve(matrix, bodies, external):
     if all(body.saturation is None for body in bodies):
         return linear
     # the start: the linear answer pulled onto the law (|J| < J_s)
-    start = linear / jnp.sqrt(1.0 + jnp.sum((linear / limit) ** 2, axis=-1, keepdims=True))
+    start = law(linear, 1.0, limit)
     polarization, failed = _saturated(matrix, external, chi, limit, start)
     return eqx.error_if(
         polarization, failed,
@@ -328,16 +328,20 @@ def _solve(matrix, bodies, external):
     )
 
 
+def _demagnetising(matrix, polarization):
+    """(T - 1) J: mu0 H of the cells' own polarisation J (N, 3) (T) at their centres."""
+    return (matrix @ polarization.reshape(-1)).reshape(polarization.shape) - polarization
+
+
 def _residual(polarization, matrix, external, chi, limit):
     """J - law(h(J)), h = B_ext + (T - 1) J at the cells (N, 3) (T)."""
-    n = external.shape[0]
-    return polarization - law(external + (matrix @ polarization.reshape(-1)).reshape(n, 3) - polarization, chi, limit)
+    return polarization - law(external + _demagnetising(matrix, polarization), chi, limit)
 
 
 def _residual_jacobian(polarization, matrix, external, chi, limit):
     """d residual / d J (3N, 3N): 1 - law'(h) (T - 1), law' a 3 x 3 block per cell."""
     n = external.shape[0]
-    h = external + (matrix @ polarization.reshape(-1)).reshape(n, 3) - polarization
+    h = external + _demagnetising(matrix, polarization)
     slope = jax.vmap(jax.jacfwd(law))(h, chi, limit)  # (N, 3, 3)
     coupled = jnp.einsum("nij,njm->nim", slope, (matrix - jnp.eye(3 * n)).reshape(n, 3, 3 * n))
     return jnp.eye(3 * n) - coupled.reshape(3 * n, 3 * n)
@@ -418,7 +422,7 @@ def coenergy(body: SoftBody, external: Float[ArrayLike, "n 3"]) -> Float[Array, 
     # < 1 on the law; clipped where the solve's tolerance lets |J| reach J_s (chi |h| / J_s ~ 1e4)
     fraction = jnp.minimum(jnp.sum(polarization**2, axis=-1) / limit**2, 1.0)
     density = (limit**2 / chi) * fraction / (1.0 + jnp.sqrt(1.0 - fraction))  # w(J), no cancellation
-    own = (matrix @ polarization.reshape(-1)).reshape(-1, 3) - polarization
+    own = _demagnetising(matrix, polarization)
     total = jnp.sum(polarization * external) + 0.5 * jnp.sum(polarization * own) - jnp.sum(density)
     return body.cell_volume * total / MU0
 
