@@ -62,7 +62,7 @@ def main():
             points = rng.uniform(-10 * RADIUS, 10 * RADIUS, size=(n, 3))
             device_points = jax.device_put(points)
             field(device_points).block_until_ready()
-            repeats = 7 if n <= 10**5 else 3
+            repeats = 7 if n <= 10**5 else 5
             ours = _best_time(lambda: field(device_points).block_until_ready(), repeats)
             theirs = _best_time(lambda: magnet.getB(points), repeats)
             ours_b, theirs_b = np.asarray(field(device_points)), magnet.getB(points)
@@ -77,7 +77,7 @@ def main():
             points = jax.device_put(rng.uniform(-10 * RADIUS, 10 * RADIUS, size=(n, 3)))
             field(points).block_until_ready()
             jacobian(points).block_until_ready()
-            repeats = 7 if n <= 10**5 else 3
+            repeats = 7 if n <= 10**5 else 5
             value = _best_time(lambda: field(points).block_until_ready(), repeats)
             derivative = _best_time(lambda: jacobian(points).block_until_ready(), repeats)
             print(f"{name:>9} {n:>9}: field {value * 1e3:7.1f} ms, jacobian {derivative * 1e3:7.1f} ms, ratio {derivative / value:.2f}")

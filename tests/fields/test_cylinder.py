@@ -4,6 +4,7 @@ References: 40-digit values from an independent integration over the side wall
 (references/make_cylinder_references.py writes references/cylinder.json), magpylib, and
 closed forms."""
 
+import importlib
 import json
 from decimal import Decimal, getcontext
 from pathlib import Path
@@ -275,6 +276,57 @@ def test_hard_cases_are_finite():
     for jac in (jax.jacfwd, jax.jacrev):
         derivs = jax.jit(jax.vmap(jac(f, argnums=(0, 1, 2, 3)), in_axes=(0, 0, 0, None)))(*args)
         assert all(np.all(np.isfinite(d)) for d in derivs)
+
+
+def _in_small_calls(f, *arrays, size=143):
+    """``f`` over the points in calls of ``size`` points (below the partitioned size)."""
+    return np.concatenate([np.asarray(f(*(a[i : i + size] for a in arrays))) for i in range(0, len(arrays[0]), size)])
+
+
+@pytest.mark.parametrize("aspect", [1e-3, 2 / 3, 10.0])
+def test_a_large_call_evaluates_each_point_in_its_own_zone(aspect, monkeypatch):
+    """A call of at least 2 PARTITION_CHUNK points sorts its points, near the magnet first,
+    and runs each zone's kernel (and the near-axis series) only where needed. Chunks of
+    256 points here (several wholly near, one mixed, several far; the last one padded).
+    Against magpylib (independent; points off the axis, see
+    test_any_direction_agrees_with_magpylib) and against the same points in small calls,
+    which select per point, with and without points on the axis, for values, derivatives
+    along the points and the height, and vmap(jacfwd) (one point per lane)."""
+    cylinder_module = importlib.import_module("magdesign.fields.cylinder")
+    monkeypatch.setattr(cylinder_module, "PARTITION_CHUNK", 256)
+    radius, height = 1e-3, aspect * 1e-3
+    polarization = jnp.array([0.7, -0.4, 1.1])
+    rng = np.random.default_rng(12)
+    count = 6 * 256 + 37  # 11 small calls of 143
+    points = rng.uniform(-6, 6, size=(count, 3)) * max(radius, height)
+    with_axis = points.copy()
+    with_axis[::50, :2] = 0.0
+    directions = rng.normal(size=(count, 3))
+
+    def value(p):
+        return cylinder(p, radius=radius, height=height, polarization=polarization)
+
+    @jax.jit
+    def tangent(p, d):
+        return jax.jvp(lambda q, h: cylinder(q, radius=radius, height=h, polarization=polarization), (p, height), (d, 1e-3 * height))[1]
+
+    for p in (points, with_axis):
+        ours = np.asarray(jax.jit(value)(p))
+        scale = np.linalg.norm(ours, axis=-1)
+        np.testing.assert_array_less(np.linalg.norm(ours - _in_small_calls(jax.jit(value), p), axis=-1), 1e-13 * scale)
+        derivative = np.asarray(tangent(p, directions))
+        expected = _in_small_calls(tangent, p, directions)
+        assert np.max(np.abs(derivative - expected)) < 1e-12 * np.max(np.abs(expected))
+    # vmap(jacfwd) runs the JVP rule one point per lane: its batch is evaluated as one call
+    jacobians = jax.jit(jax.vmap(jax.jacfwd(value)))
+    expected = _in_small_calls(jacobians, with_axis)
+    assert np.max(np.abs(np.asarray(jacobians(with_axis)) - expected)) < 1e-12 * np.max(np.abs(expected))
+    if aspect == 2 / 3:
+        rho = np.hypot(points[:, 0], points[:, 1])
+        edge_distance = np.hypot(rho - radius, np.abs(points[:, 2]) - height / 2)
+        kept = (rho > 0.1 * radius) & (edge_distance > 1e-6 * radius)
+        theirs = magpylib.magnet.Cylinder(polarization=np.asarray(polarization), dimension=(2 * radius, height)).getB(points[kept])
+        assert np.max(rel_err(np.asarray(jax.jit(value)(points))[kept], theirs)) < 1e-10
 
 
 def test_gradients_on_the_axis_are_correct():
