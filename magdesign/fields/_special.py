@@ -236,20 +236,19 @@ def multipole(coefficients, rho2, z, switch_r2, wanted=("p", "z", "u", "p_z", "z
     top = max(coefficients) + 2
     r2 = jnp.maximum(rho2 + z * z, switch_r2)
     inv_r = rsqrt(r2)
-    mu = z * inv_r
-    # Legendre polynomials P_n(mu) and their derivatives, upwards from n = 0, 1.
-    legendre, derivative = [jnp.ones_like(mu), mu], [jnp.zeros_like(mu), jnp.ones_like(mu)]
+    inv_r2, z_r2 = inv_r * inv_r, z * inv_r * inv_r
+    # The solid harmonics Q_n = P_n(mu) / r^(n+1) and D_n = P'_n(mu) / r^(n+2), upwards
+    # from n = 0, 1, by Bonnet's recursion and P'_{n+1} = (n+1) P_n + mu P'_n with the
+    # powers of 1/r carried along (no separate powers or products in the terms).
+    solid, derivative = [inv_r, z_r2 * inv_r], [0.0 * inv_r, inv_r2 * inv_r]
     for n in range(1, top):
-        legendre.append(((2 * n + 1) * mu * legendre[n] - n * legendre[n - 1]) / (n + 1))
-        derivative.append((n + 1) * legendre[n] + mu * derivative[n])
-    powers = [jnp.ones_like(mu)]  # powers[m] = 1 / r^m
-    for _ in range(top + 2):
-        powers.append(powers[-1] * inv_r)
+        solid.append((2 * n + 1) / (n + 1) * z_r2 * solid[n] - n / (n + 1) * inv_r2 * solid[n - 1])
+        derivative.append((n + 1) * inv_r2 * solid[n] + z_r2 * derivative[n])
     terms = {
-        "p": lambda n, w: -w * derivative[n + 1] * powers[n + 3],
-        "z": lambda n, w: -w * (n + 1) * legendre[n + 1] * powers[n + 2],
-        "u": lambda n, w: w * reciprocal(r2 + z * r2 * inv_r) if n == 0 else w * derivative[n] / n * powers[n + 2],
-        "p_z": lambda n, w: w * (n + 1) * derivative[n + 2] * powers[n + 4],
-        "z_z": lambda n, w: w * (n + 1) * (n + 2) * legendre[n + 2] * powers[n + 3],
+        "p": lambda n, w: -w * derivative[n + 1],
+        "z": lambda n, w: -w * (n + 1) * solid[n + 1],
+        "u": lambda n, w: w * reciprocal(r2 + z * r2 * inv_r) if n == 0 else w / n * derivative[n],
+        "p_z": lambda n, w: w * (n + 1) * derivative[n + 2],
+        "z_z": lambda n, w: w * (n + 1) * (n + 2) * solid[n + 2],
     }
     return {name: sum(terms[name](n, w) for n, w in coefficients.items()) for name in wanted}
