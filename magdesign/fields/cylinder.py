@@ -100,7 +100,7 @@ def _on_axis_polynomials(order):
     t, one_t2 = np.polynomial.Polynomial([0.0, 1.0]), np.polynomial.Polynomial([1.0, 0.0, 1.0])
     for n in range(order):
         polynomials.append(polynomials[n].deriv() * one_t2 - (2 * n + 1) * t * polynomials[n])
-    return tuple(tuple(p.coef) for p in polynomials)
+    return tuple(tuple(float(c) for c in p.coef) for p in polynomials)  # Python floats: weakly typed, float32 stays float32
 
 
 # Near the axis (s < AXIS_SERIES_S) the functions are taken from their series in s, whose
@@ -513,11 +513,12 @@ def _field(q, polarization, f, axial):
     x, y = q[..., :1], q[..., 1:2]
     jx, jy, jz = _components(polarization, axial)
     p, z = f["p"][..., None], f["z"][..., None]
-    field = jz[..., None] * jnp.where(_E[2], z, p * q)
+    e = _E.astype(q.dtype)  # float32 points stay float32
+    field = jz[..., None] * jnp.where(e[2], z, p * q)
     if not axial:
         diagonal, v = (f["u"] + f["inside"])[..., None], f["v"][..., None]
-        column_x = jnp.where(_E[2], p * x, v * x * q + diagonal * _E[0])
-        column_y = jnp.where(_E[2], p * y, v * y * q + diagonal * _E[1])
+        column_x = jnp.where(e[2], p * x, v * x * q + diagonal * e[0])
+        column_y = jnp.where(e[2], p * y, v * y * q + diagonal * e[1])
         field = field + jx[..., None] * column_x + jy[..., None] * column_y
     return field
 
@@ -530,22 +531,23 @@ def _points_tangent(q, polarization, f, dq, axial):
         B = J_z (p q_perp + z e_z) + (u + chi) J_perp + v (J_perp . q_perp) q_perp
             + p (J_perp . q_perp) e_z
     """
-    q_perp, dq_perp = q * _E[:2].sum(0), dq * _E[:2].sum(0)
+    e = _E.astype(q.dtype)  # float32 points stay float32
+    q_perp, dq_perp = q * e[:2].sum(0), dq * e[:2].sum(0)
     dz = dq[..., 2:]
     ds_half = q[..., :1] * dq[..., :1] + q[..., 1:2] * dq[..., 1:2]  # (ds / 2)
     jx, jy, jz = _components(polarization, axial)
     p, p_s, p_z, z_z = (f[name][..., None] for name in ("p", "p_s", "p_z", "z_z"))
     dp = 2.0 * p_s * ds_half + p_z * dz
-    tangent = jz[..., None] * (dp * q_perp + p * dq_perp + (p_z * ds_half + z_z * dz) * _E[2])
+    tangent = jz[..., None] * (dp * q_perp + p * dq_perp + (p_z * ds_half + z_z * dz) * e[2])
     if not axial:
         v, v_s = f["v"][..., None], f["v_s"][..., None]
-        j_perp = jx[..., None] * _E[0] + jy[..., None] * _E[1]
+        j_perp = jx[..., None] * e[0] + jy[..., None] * e[1]
         along = jx[..., None] * q[..., :1] + jy[..., None] * q[..., 1:2]
         d_along = jx[..., None] * dq[..., :1] + jy[..., None] * dq[..., 1:2]
         du = v * ds_half + p * dz
         dv = 2.0 * v_s * ds_half + 2.0 * p_s * dz
         tangent = tangent + du * j_perp + (dv * along + v * d_along) * q_perp + v * along * dq_perp
-        tangent = tangent + (dp * along + p * d_along) * _E[2]
+        tangent = tangent + (dp * along + p * d_along) * e[2]
     return tangent
 
 
