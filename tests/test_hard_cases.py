@@ -5,6 +5,7 @@ is documented, and no ad-hoc epsilon hides outside the stability modules.
 Each property compiles one jitted function and feeds it hypothesis' draws, so the suite
 stays fast."""
 
+import importlib
 import json
 import re
 from pathlib import Path
@@ -180,9 +181,9 @@ FLOAT32_AXIS_RTOL = 1e-6
 
 
 @pytest.mark.parametrize("polarization", [1.17, (0.5, -0.3, 1.0)])
-def test_float32_cylinder_keeps_its_documented_tolerance(polarization):
+def test_float32_cylinder_keeps_its_documented_tolerance(polarization, monkeypatch):
     """Axial, and with a diametral part (which until 2026-11-24 failed on float32 points:
-    float64 constants met float32 values)."""
+    float64 constants met float32 values); in small calls and as one partitioned call."""
     rng = np.random.default_rng(7)
     directions = rng.normal(size=(4000, 3))
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
@@ -196,6 +197,40 @@ def test_float32_cylinder_keeps_its_documented_tolerance(polarization):
     assert single.dtype == jnp.float32
     error = np.linalg.norm(np.asarray(single, np.float64) - exact, axis=1) / np.linalg.norm(exact, axis=1)
     assert error.max() < FLOAT32_CYLINDER_RTOL
+    # the 4000 points as one partitioned call (cylinder._partitioned), in chunks of 256
+    monkeypatch.setattr(importlib.import_module("magdesign.fields.cylinder"), "PARTITION_CHUNK", 256)
+    single = cylinder(jnp.asarray(points, jnp.float32), radius=1.5e-3, height=1e-3, polarization=polarization)
+    assert single.dtype == jnp.float32
+    error = np.linalg.norm(np.asarray(single, np.float64) - exact, axis=1) / np.linalg.norm(exact, axis=1)
+    assert error.max() < FLOAT32_CYLINDER_RTOL
+
+
+def test_float32_thin_magnet_derivatives_and_traced_height_stay_float32():
+    """A thin magnet's side-wall nodes and weights were numpy float64 and turned float32
+    into float64 (a TypeError until 2026-11-24): its Jacobian along the points, its field
+    with the height traced under jit (every regime compiled) and its derivative along the
+    height stay float32, near their float64 values."""
+    points = np.random.default_rng(9).uniform(-3e-3, 3e-3, size=(50, 3))
+    polarization = jnp.array([0.5, -0.3, 1.0])
+
+    def field(p, height):
+        return cylinder(p, radius=1e-3, height=height, polarization=polarization)
+
+    def jacobian(p):
+        return jax.vmap(jax.jacfwd(field), in_axes=(0, None))(p, 1e-6)
+
+    single, exact = jacobian(jnp.asarray(points, jnp.float32)), np.asarray(jacobian(jnp.asarray(points)))
+    assert single.dtype == jnp.float32
+    assert np.max(np.abs(np.asarray(single, np.float64) - exact)) < FLOAT32_CYLINDER_RTOL * np.max(np.abs(exact))
+    traced = jax.jit(field)(jnp.asarray(points, jnp.float32), jnp.float32(1e-6))
+    assert traced.dtype == jnp.float32
+    exact = np.asarray(field(jnp.asarray(points), 1e-6))
+    error = np.linalg.norm(np.asarray(traced, np.float64) - exact, axis=1) / np.linalg.norm(exact, axis=1)
+    assert error.max() < FLOAT32_CYLINDER_RTOL
+    along_height = jax.grad(lambda h: field(jnp.asarray(points[0], jnp.float32), h)[2])(jnp.float32(1e-6))
+    assert along_height.dtype == jnp.float32
+    exact = float(jax.grad(lambda h: field(jnp.asarray(points[0]), h)[2])(1e-6))
+    assert abs(float(along_height) - exact) < FLOAT32_CYLINDER_RTOL * abs(exact)
 
 
 def test_float32_on_axis_keeps_its_documented_tolerance():

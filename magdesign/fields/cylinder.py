@@ -211,7 +211,8 @@ def _axis_u(s, z, b, u):
     return jnp.where(s < AXIS_SERIES_S, series, u)
 
 
-_WALL_X, _WALL_W = np.polynomial.legendre.leggauss(WALL_NODES)
+# Python floats (weakly typed): numpy float64 scalars would turn float32 values into float64
+_WALL_X, _WALL_W = (tuple(float(v) for v in a) for a in np.polynomial.legendre.leggauss(WALL_NODES))
 # For the wall integral: each wanted entry is the integral of this face quantity, or of
 # its zeta-derivative (second element True).
 _WALL_SOURCES = {"p": ("p_z", False), "z": ("z_z", False), "u": ("p", False), "p_z": ("p_z", True), "z_z": ("z_z", True)}
@@ -421,7 +422,8 @@ def _partitioned(s, z, far, zoned):
         start, s_c, z_c = arrays
         # each zone's kernel only where the chunk holds some of its points
         near_values = jax.lax.cond(start < near_count, lambda: zoned(s_c, z_c, None, NEAR), lambda: skipped)
-        far_values = jax.lax.cond(start + PARTITION_CHUNK > near_count, lambda: zoned(s_c, z_c, None, FAR), lambda: skipped)
+        holds_far = (start + PARTITION_CHUNK > near_count) & (near_count < n)  # not the padding alone
+        far_values = jax.lax.cond(holds_far, lambda: zoned(s_c, z_c, None, FAR), lambda: skipped)
         far_c = start + jnp.arange(PARTITION_CHUNK, dtype=jnp.int32) >= near_count
         return None, {name: jnp.where(far_c, far_values[name], near_values[name]) for name in near_values}
 

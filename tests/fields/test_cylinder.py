@@ -298,7 +298,9 @@ def test_a_large_call_evaluates_each_point_in_its_own_zone(aspect, monkeypatch):
     polarization = jnp.array([0.7, -0.4, 1.1])
     rng = np.random.default_rng(12)
     count = 6 * 256 + 37  # 11 small calls of 143
-    points = rng.uniform(-6, 6, size=(count, 3)) * max(radius, height)
+    # a box about as wide as the multipole switch sphere: about half the points near
+    switch = MULTIPOLE_SWITCH * np.hypot(radius, height / 2)
+    points = rng.uniform(-1, 1, size=(count, 3)) * switch
     with_axis = points.copy()
     with_axis[::50, :2] = 0.0
     directions = rng.normal(size=(count, 3))
