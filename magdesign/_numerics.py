@@ -183,6 +183,11 @@ FD_CALIBRATION_STEP = 1e-6
 # fastest; at 0.02 rad its sensitivity was 1.7e-4 off, at 0.005 rad below 1e-6 (against
 # 0.0025 rad); rounding ~1e-15 / step^2 ~ 4e-11 for the spring coefficient.
 TILT_DIFFERENCE_STEP = 0.005
+# The five tilts (rad) of those central differences and their weights for the first and
+# the second derivative: f' = TILT_FIRST_DIFFERENCE . f(TILT_DIFFERENCE_ANGLES), alike f''.
+TILT_DIFFERENCE_ANGLES = tuple(TILT_DIFFERENCE_STEP * k for k in (-2.0, -1.0, 0.0, 1.0, 2.0))
+TILT_FIRST_DIFFERENCE = tuple(w / (12.0 * TILT_DIFFERENCE_STEP) for w in (1.0, -8.0, 0.0, 8.0, -1.0))
+TILT_SECOND_DIFFERENCE = tuple(w / (12.0 * TILT_DIFFERENCE_STEP**2) for w in (-1.0, 16.0, -30.0, 16.0, -1.0))
 
 
 # Smallest distance to a film's corner, as a fraction of the film's width: the field of a

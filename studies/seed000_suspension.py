@@ -30,7 +30,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from _report import Report, arguments, progress
-from magdesign._numerics import TILT_DIFFERENCE_STEP
+from magdesign._numerics import TILT_DIFFERENCE_ANGLES, TILT_DIFFERENCE_STEP, TILT_SECOND_DIFFERENCE
 from magdesign.fields import cuboid, soft
 from magdesign.scene import loads_from_spec, outputs, parameters, scene_from_spec, with_parameters
 from magdesign.scene.pose import posed_cylinder, rotation
@@ -152,9 +152,9 @@ def soleplate(p, lengths):
         return soft.coenergy(plate, external), field[:, 2], MU0 * jnp.max(jnp.linalg.norm(magnetization, axis=-1))
 
     # five tilts for the spring, then the sensitivity's span; one program for every length
-    thetas = jnp.asarray(np.append(TILT_DIFFERENCE_STEP * np.arange(-2.0, 3.0), SENS_SPAN))
+    thetas = jnp.asarray(TILT_DIFFERENCE_ANGLES + (SENS_SPAN,))
     sweep = jax.jit(jax.vmap(at, in_axes=(0, None)))
-    second = np.array([-1.0, 16.0, -30.0, 16.0, -1.0]) / (12.0 * TILT_DIFFERENCE_STEP**2)
+    second = np.array(TILT_SECOND_DIFFERENCE)
     results = {}
     for name, length in lengths.items():
         energy, bz, peak = (np.asarray(a) for a in sweep(thetas, length))

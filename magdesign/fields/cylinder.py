@@ -746,4 +746,3 @@ def cylinder_on_axis(
         z,
     )
     return 0.5 * remanence * combined
-

@@ -59,7 +59,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from magdesign._numerics import TILT_DIFFERENCE_STEP
+from magdesign._numerics import TILT_DIFFERENCE_ANGLES, TILT_FIRST_DIFFERENCE, TILT_SECOND_DIFFERENCE
 from magdesign.fields import cylinder, soft
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect
@@ -238,10 +238,9 @@ class PoleScene(AbstractScene):
             # Five-point central differences over the tilt of exact values (the co-energy
             # and the field): the exact second derivative of the plate's cylinder kernel
             # costs ~95 s to compile; these need its values only. Truncation O(step^4).
-            angles = TILT_DIFFERENCE_STEP * jnp.arange(-2.0, 3.0)
+            angles = jnp.array(TILT_DIFFERENCE_ANGLES)
             energy, field = jax.vmap(self.coenergy)(angles), jax.vmap(field_a)(angles)
-            first = jnp.array([1.0, -8.0, 0.0, 8.0, -1.0]) / (12.0 * TILT_DIFFERENCE_STEP)
-            second = jnp.array([-1.0, 16.0, -30.0, 16.0, -1.0]) / (12.0 * TILT_DIFFERENCE_STEP**2)
+            first, second = jnp.array(TILT_FIRST_DIFFERENCE), jnp.array(TILT_SECOND_DIFFERENCE)
             return {
                 "field_sensitivity": first @ field,
                 "spring_coefficient": -(second @ energy) / self.ball_radius,
