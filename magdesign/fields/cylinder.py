@@ -369,13 +369,13 @@ def _zoned_jet(s, z, far, zone, b, names, regime):
     computed, each point's own selected). Each pair of names is one loop over the points
     (see _materialized); it computes only its own two entries (the integrals with
     p = gamma^2 only for z and u)."""
+    if zone == FAR:
+        return _materialized(_far_jet(s, z, b, tuple(names)), s, paired=False)
     out = {}
     for i in range(0, len(names), 2):
         pair = tuple(names[i : i + 2])
         if zone == NEAR:
             values = _near_jet(s, z, b, pair, regime)
-        elif zone == FAR:
-            values = _far_jet(s, z, b, pair)
         else:
             near, far_values = _near_jet(s, z, b, pair, regime), _far_jet(s, z, b, pair)
             values = {name: jnp.where(far, far_values[name], near[name]) for name in pair}
@@ -432,16 +432,19 @@ def _partitioned(s, z, far, zoned):
     return {name: value.reshape(-1)[place].reshape(shape) for name, value in values.items()}
 
 
-def _materialized(values, s):
-    """The named arrays, each computed once into memory: packed two by two into complex
-    arrays (:func:`magdesign.fields._special.materialize`), an odd one out beside s (a
-    real value: a constant there would let XLA simplify the packing away)."""
-    names = list(values)
-    arrays = list(values.values()) + ([s] if len(values) % 2 else [])
-    out = {}
-    for i in range(0, len(arrays), 2):
-        pair = materialize(arrays[i], arrays[i + 1], 1.0 + s)
-        out.update(zip(names[i : i + 2], (jnp.real(pair), jnp.imag(pair))))
+def _materialized(values, s, paired=True):
+    """The named arrays, each computed once into memory
+    (:func:`magdesign.fields._special.materialize`): packed two by two into complex arrays
+    where ``paired`` (results that share expensive work), else each alone, as an odd one
+    out is, in a real loop."""
+    names, arrays, out = list(values), list(values.values()), {}
+    step = 2 if paired else 1
+    for i in range(0, len(names), step):
+        if i + 1 < len(names) and paired:
+            pair = materialize(arrays[i], arrays[i + 1], 1.0 + s)
+            out.update(zip(names[i : i + 2], (jnp.real(pair), jnp.imag(pair))))
+        else:
+            out[names[i]] = materialize(arrays[i], None, 1.0 + s)
     return out
 
 
