@@ -8,6 +8,8 @@ Numbers are stored as float64 arrays so that a jitted solve is compiled once per
 structure (names, model, senses) and reused for new bounds, starts and target values.
 """
 
+import functools
+import weakref
 from collections.abc import Callable, Mapping
 
 import equinox as eqx
@@ -216,3 +218,27 @@ class Problem(eqx.Module):
     def limit_rows(self) -> tuple[tuple[int, str], ...]:
         """(limit index, side) of each inequality row, in solver order."""
         return tuple((i, side) for i, lim in enumerate(self.limits) for side in lim.sides)
+
+
+def per_problem(fn):
+    """Memoise ``fn(problem)`` (host-side facts about a problem: arrays, names, layouts)
+    for as long as that problem object lives. A Problem is immutable, and a solve of a
+    small problem costs less than recomputing these from its fields each call."""
+    cache = {}
+
+    @functools.wraps(fn)
+    def memoised(problem):
+        key = id(problem)
+        entry = cache.get(key)
+        if entry is not None and entry[0]() is problem:
+            return entry[1]
+
+        def forget(ref):
+            if cache.get(key, (None,))[0] is ref:
+                del cache[key]
+
+        value = fn(problem)
+        cache[key] = (weakref.ref(problem, forget), value)
+        return value
+
+    return memoised

@@ -1,10 +1,12 @@
 """Results of the design solver: a JSON-ready record and a readable table."""
 
 import csv
+from typing import NamedTuple
 
 import equinox as eqx
 import numpy as np
 
+from magdesign.design.problem import per_problem
 from magdesign.units import convert
 
 
@@ -33,6 +35,29 @@ def _keys(problem):
     return [t.output for t in problem.targets] + [
         f"{problem.limits[i].output}.{side}" for i, side in problem.limit_rows
     ] + list(problem.fixed_names)
+
+
+class _Layout(NamedTuple):
+    """A problem's names as a result shows them: its variables, model outputs
+    (``Problem.outputs``), theta keys (:func:`_keys`: targets first, then limit rows),
+    (output, side) of each limit row, and display units."""
+
+    names: list
+    outputs: tuple
+    n_targets: int
+    keys: list
+    limit_rows: list
+    units: dict
+
+
+@per_problem
+def _layout(problem):
+    units = {v.name: v.unit for v in problem.variables}
+    units.update({t.output: t.unit for t in problem.targets})
+    units.update({lim.output: lim.unit for lim in problem.limits})
+    units.update(problem.report_units)
+    limit_rows = [(problem.limits[i].output, side) for i, side in problem.limit_rows]
+    return _Layout([v.name for v in problem.variables], problem.outputs, len(problem.targets), _keys(problem), limit_rows, units)
 
 
 def format_quantity(value: float, unit: str | None) -> str:
@@ -89,20 +114,15 @@ class DesignResult(eqx.Module):
                 solution.derivatives,
             )
         )
-        names = [v.name for v in problem.variables]
-        n_targets = len(problem.targets)
-        outputs = dict(zip(problem.outputs, values))
-        targets = {
-            t.output: {"target": theta[k], "achieved": outputs[t.output]} for k, t in enumerate(problem.targets)
-        }
+        names, output_names, n_targets, keys, limit_rows, units = _layout(problem)
+        rows = n_targets + len(limit_rows)
+        outputs = dict(zip(output_names, values))
+        targets = {output: {"target": theta[k], "achieved": outputs[output]} for k, output in enumerate(keys[:n_targets])}
         limits = {}
-        for k, (i, side) in enumerate(problem.limit_rows):
-            limit = problem.limits[i]
-            entry = limits.setdefault(limit.output, {"achieved": outputs[limit.output], "active": False})
+        for k, (output, side) in enumerate(limit_rows):
+            entry = limits.setdefault(output, {"achieved": outputs[output], "active": False})
             entry[side] = theta[n_targets + k]
             entry["active"] = entry["active"] or active_rows[k]
-        keys = _keys(problem)
-        rows = n_targets + len(problem.limit_rows)
         derivatives = {
             key: {name: derivatives[j][column] for j, name in enumerate(names)}
             for column, key in enumerate(keys)
@@ -114,10 +134,6 @@ class DesignResult(eqx.Module):
         violated = tuple(
             key for k, key in enumerate(keys[:rows]) if (abs(residuals[k]) if k < n_targets else residuals[k]) > float(rtol)
         )
-        units = {v.name: v.unit for v in problem.variables}
-        units.update({t.output: t.unit for t in problem.targets})
-        units.update({lim.output: lim.unit for lim in problem.limits})
-        units.update(problem.report_units)
         return cls(
             status=STATUS_NAMES[int(solution.status)],
             parameters=dict(zip(names, x)),
@@ -129,7 +145,7 @@ class DesignResult(eqx.Module):
             outputs=outputs,
             steps=int(solution.steps),
             seconds=float(seconds),
-            units=units,
+            units=dict(units),
         )
 
     @property

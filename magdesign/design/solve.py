@@ -39,6 +39,7 @@ import functools
 import os
 import sys
 import time
+from typing import NamedTuple
 
 import equinox as eqx
 import jax
@@ -69,7 +70,7 @@ from magdesign._numerics import (
     safe_div,
 )
 from magdesign.design._qp import solve_qp
-from magdesign.design.problem import Problem
+from magdesign.design.problem import Problem, per_problem
 from magdesign.design.report import DesignResult, DesignStatus, DesignSweep
 
 # Armijo's sufficient-decrease fraction of the line search, and the shortest step it tries.
@@ -589,15 +590,8 @@ def _packed(problem, y0, theta, settings):
 
 def _unpack(problem, packed):
     """CoreSolution of numpy arrays from :func:`_packed`'s vector(s) (leading batch axes kept)."""
-    n, m, k = len(problem.variables), len(problem.targets) + len(problem.limit_rows), len(problem.outputs)
-    p = m + len(problem.fixed_names)
-    sizes = {"x": n, "multipliers": m, "outputs": k, "residuals": m, "active_limits": m - len(problem.targets),
-             "at_lower": n, "at_upper": n, "derivatives": n * p, "status": 1, "steps": 1}
-    parts, start = {}, 0
-    for name, size in sizes.items():
-        parts[name] = packed[..., start : start + size]
-        start += size
-    batch = packed.shape[:-1]
+    parts = {name: packed[..., start:stop] for name, (start, stop) in _host(problem).layout.items()}
+    batch, n = packed.shape[:-1], len(problem.variables)
     return CoreSolution(
         x=parts["x"],
         multipliers=parts["multipliers"],
@@ -606,7 +600,7 @@ def _unpack(problem, packed):
         active_limits=parts["active_limits"] > 0.5,
         at_lower=parts["at_lower"] > 0.5,
         at_upper=parts["at_upper"] > 0.5,
-        derivatives=parts["derivatives"].reshape(*batch, n, p),
+        derivatives=parts["derivatives"].reshape(*batch, n, -1),
         status=parts["status"][..., 0].astype(int),
         steps=parts["steps"][..., 0].astype(int),
     )
@@ -622,25 +616,65 @@ def _split(tree):
     return (treedef, is_array, static), [leaf for array, leaf in zip(is_array, leaves) if array]
 
 
+class _Host(NamedTuple):
+    """What solving a problem needs of it outside the compiled core, found once per
+    problem object (:func:`per_problem`): its arrays (numpy, :func:`problem_arrays`), its
+    variables' own starts (scaled) and theta on the device, its structure and array
+    leaves (:func:`_split`, the leaves on the device: numpy leaves would be copied there
+    at every call), and where each part of the packed solution lies."""
+
+    arrays: tuple
+    y0: Array
+    theta: Array
+    key: tuple
+    leaves: list
+    layout: dict
+
+
+@per_problem
+def _host(problem):
+    arrays = problem_arrays(problem, np)
+    lower, _, scale, start, theta = arrays
+    key, leaves = _split(problem)
+    n, m, k = len(problem.variables), len(problem.targets) + len(problem.limit_rows), len(problem.outputs)
+    sizes = {"x": n, "multipliers": m, "outputs": k, "residuals": m, "active_limits": m - len(problem.targets),
+             "at_lower": n, "at_upper": n, "derivatives": n * len(theta), "status": 1, "steps": 1}
+    stops = np.cumsum(list(sizes.values())).tolist()
+    layout = {name: (stop - size, stop) for (name, size), stop in zip(sizes.items(), stops)}
+    return _Host(arrays, jax.device_put((start - lower) / scale), jax.device_put(theta), key,
+                 jax.device_put(leaves), layout)
+
+
 @functools.lru_cache(maxsize=64)
 def _compiled(key, batched):
-    """The jitted core of one problem structure: (arrays, y0, theta) -> packed solution,
-    vmapped over y0 and theta if ``batched``."""
-    treedef, is_array, static = key
+    """The jitted core of one structure of (problem, settings), ``key`` a pair of
+    :func:`_split` keys: (arrays, y0, theta) -> packed solution, ``arrays`` the pair of
+    their array leaves, vmapped over y0 and theta if ``batched``."""
 
     def run(arrays, y0, theta):
-        arrays = iter(arrays)
-        leaves = [next(arrays) if array else leaf for array, leaf in zip(is_array, static)]
-        problem, settings = jax.tree.unflatten(treedef, leaves)
+        problem, settings = (_joined(part_key, part) for part_key, part in zip(key, arrays))
         return _packed(problem, y0, theta, settings)
 
     return jax.jit(jax.vmap(run, in_axes=(None, 0, 0)) if batched else run)
 
 
-def _run(problem, y0, theta, settings, *, batched=False):
-    """The packed solution(s) as a numpy array, from the cached compiled core."""
-    key, arrays = _split((problem, settings))
-    return np.asarray(_compiled(key, batched)(arrays, y0, theta))
+def _joined(key, arrays):
+    """The pytree that :func:`_split` split into ``key`` and ``arrays``."""
+    treedef, is_array, static = key
+    arrays = iter(arrays)
+    return jax.tree.unflatten(treedef, [next(arrays) if array else leaf for array, leaf in zip(is_array, static)])
+
+
+def _structure(problem, settings):
+    """(key, arrays) of (problem, settings) for :func:`_compiled`."""
+    host, (settings_key, settings_leaves) = _host(problem), _split(settings)
+    return (host.key, settings_key), (host.leaves, settings_leaves)
+
+
+def _run(problem, y0, theta, settings):
+    """The packed solution as a numpy array, from the cached compiled core."""
+    key, arrays = _structure(problem, settings)
+    return np.asarray(_compiled(key, False)(arrays, y0, theta))
 
 
 @functools.lru_cache(maxsize=16)
@@ -698,13 +732,12 @@ def solve(
         derivatives of the parameters with respect to the target values and active limit
         bounds.
     """
-    settings = settings_of(rtol, atol, max_steps)
-    arrays = problem_arrays(problem, np)
-    y0, theta = _start(problem, start, arrays), arrays[4]
+    settings, host = settings_of(rtol, atol, max_steps), _host(problem)
+    y0, theta = (host.y0 if not start else _start(problem, start, host.arrays)), host.theta
     began = time.perf_counter()
     packed = _run(problem, y0, theta, settings)
     seconds = time.perf_counter() - began
-    return DesignResult.from_core(problem, _unpack(problem, packed), theta, seconds, settings.rtol)
+    return DesignResult.from_core(problem, _unpack(problem, packed), host.arrays[4], seconds, settings.rtol)
 
 
 def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
@@ -731,7 +764,7 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
     size = min(1 << max(share - 1, 0).bit_length(), limit) if share <= limit else -(-share // -(-share // limit))
     size = -(-size // len(devices)) * len(devices)
     sharding = NamedSharding(Mesh(np.array(devices), ("points",)), PartitionSpec("points")) if len(devices) > 1 else None
-    key, arrays = _split((problem, settings))
+    key, arrays = _structure(problem, settings)
     run, size = _batch_program(key, arrays, size, y0.shape[1], thetas.shape[1], sharding)
     packed = []
     bar = tqdm(total=share, unit="design", delay=1.0, disable=None if progress is None else not progress,
