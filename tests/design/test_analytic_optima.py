@@ -274,3 +274,15 @@ def test_solved_values_are_float64_arrays_in_a_jitted_model():
     # the model sees float64 tracers: a float32 slip would cost the 1e-9 accuracy above
     solve(GAP_PROBLEM)  # traces the field model here, unless an earlier test did
     assert FIELD_MODEL_DTYPES and all(dtype == jnp.float64 for dtype in FIELD_MODEL_DTYPES)
+
+
+def test_each_new_problem_is_solved_as_itself():
+    # solve() keeps per-problem facts (arrays, starts, targets) while a problem object
+    # lives; problems made and dropped one after another often reuse an id, and each must
+    # still be solved with its own target and start: x^2 = value, so x = sqrt(value)
+    square = lambda p: {"square": p["x"] ** 2}  # noqa: E731
+    for value, start in [(2.0, 1.0), (3.0, 2.5), (5.0, 1.5), (7.0, 2.0)]:
+        result = solve(Problem(square, [Variable("x", 0.5, 3.0, start=start)], [Target("square", value)]))
+        assert result.successful
+        assert result.parameters["x"] == pytest.approx(math.sqrt(value), rel=1e-9)
+        assert result.targets["square"]["target"] == value
