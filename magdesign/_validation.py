@@ -16,20 +16,24 @@ def _concrete(value):
         return None
 
 
-def check_positive(**values):
-    """Raise ValueError unless every named value is > 0 (finite, all elements)."""
-    for name, value in values.items():
-        concrete = _concrete(value)
-        if concrete is not None and not (np.all(np.isfinite(concrete)) and np.all(concrete > 0)):
-            raise ValueError(f"{name} must be positive and finite, got {value!r}")
+def check_positive(unit=None, **values):
+    """Raise ValueError unless every named value is > 0 (finite, all elements); the
+    message names the value and, where given, its ``unit`` ("m")."""
+    _check_sign(values, unit, np.greater, "positive")
 
 
-def check_nonnegative(**values):
-    """Raise ValueError unless every named value is >= 0 (finite, all elements)."""
+def check_nonnegative(unit=None, **values):
+    """Raise ValueError unless every named value is >= 0 (finite, all elements); the
+    message names the value and, where given, its ``unit``."""
+    _check_sign(values, unit, np.greater_equal, "non-negative")
+
+
+def _check_sign(values, unit, compare, words):
     for name, value in values.items():
         concrete = _concrete(value)
-        if concrete is not None and not (np.all(np.isfinite(concrete)) and np.all(concrete >= 0)):
-            raise ValueError(f"{name} must be non-negative and finite, got {value!r}")
+        if concrete is not None and not (np.all(np.isfinite(concrete)) and np.all(compare(concrete, 0))):
+            in_unit = f" (in {unit})" if unit else ""
+            raise ValueError(f"{name} must be {words} and finite{in_unit}, got {value!r}")
 
 
 def check_last_axis(name, array, size):

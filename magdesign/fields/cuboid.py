@@ -324,7 +324,7 @@ def cuboid_tensor(
     """
     check_last_axis("points", points, 3)
     check_last_axis("dimension", dimension, 3)
-    check_positive(dimension=dimension)
+    check_positive(dimension=dimension, unit="m")
     points = float_array(points)
     half = jnp.asarray(0.5 * jnp.asarray(dimension), dtype=points.dtype)
     shape = jnp.broadcast_shapes(points.shape, half.shape)

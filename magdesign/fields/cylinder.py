@@ -691,7 +691,7 @@ def cylinder(
     if fidelity not in FIDELITIES:
         raise ValueError(f"fidelity must be one of {FIDELITIES}, got {fidelity!r}")
     check_last_axis("points", points, 3)
-    check_positive(radius=radius, height=height)
+    check_positive(radius=radius, height=height, unit="m")
     axial = jnp.ndim(polarization) == 0
     if not axial:
         check_last_axis("polarization", polarization, 3)
@@ -734,7 +734,7 @@ def cylinder_on_axis(
         bracket is evaluated as R^2 D (u + v) / (s_u s_v (u s_v + v s_u)) where u, v have
         the same sign (no cancellation at any distance), and as written where they differ.
     """
-    check_positive(radius=radius, height=height)
+    check_positive(radius=radius, height=height, unit="m")
     z = float_array(z)
     u = height + z
     s_u = jnp.sqrt(radius**2 + u * u)

@@ -53,7 +53,7 @@ def film_magnitude(
     Returns |B| = J0 (1 - e^{-kd}) e^{-kz}, with 1 - e^{-kd} = -expm1(-kd) (full
     relative precision for a thin film, kd << 1); never overflows.
     """
-    check_positive(period=period, thickness=thickness)
+    check_positive(period=period, thickness=thickness, unit="m")
     k = 2.0 * jnp.pi / period
     return magnetization * -jnp.expm1(-k * thickness) * jnp.exp(-k * jnp.asarray(z))
 
@@ -125,7 +125,7 @@ def film(
     Returns:
         (Bx, Bz) in the film frame (module docstring): Bz along the depth axis.
     """
-    check_positive(period=period, thickness=thickness)
+    check_positive(period=period, thickness=thickness, unit="m")
     k = 2.0 * jnp.pi / period
     x, z = jnp.asarray(x, dtype=float), jnp.asarray(z, dtype=float)
     if periods is not None:

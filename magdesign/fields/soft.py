@@ -142,7 +142,8 @@ def soft_body(
     wanted = SIZE_LENGTHS[shape]
     if size.shape != (wanted,):
         raise ValueError(f"size of a {shape} must hold {wanted} length(s) (m), got shape {size.shape}")
-    check_positive(size=size, permeability=permeability)
+    check_positive(size=size, unit="m")
+    check_positive(permeability=permeability)
     if saturation is not None:
         check_positive(saturation=saturation)
         check_positive(**{"permeability - 1 (a saturating body needs mu_r > 1)": jnp.asarray(permeability) - 1.0})

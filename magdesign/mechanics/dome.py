@@ -97,7 +97,7 @@ def _check(outer_radius, thickness, material, fidelity, base, mesh):
         )
     if len(mesh) != 2 or any(int(n) != n or n < 1 for n in mesh):
         raise ValueError(f"mesh must be two positive integers (wall, meridian), got {mesh!r}")
-    check_positive(outer_radius=outer_radius, thickness=thickness)
+    check_positive(outer_radius=outer_radius, thickness=thickness, unit="m")
     Ro, t = _concrete(outer_radius), _concrete(thickness)
     if Ro is not None and t is not None and not np.all(t < Ro):
         raise ValueError(f"thickness must be smaller than outer_radius, got {thickness!r} >= {outer_radius!r}")
@@ -225,7 +225,7 @@ def dome_compliance(
     Python call reuses the program compiled for the same fidelity, base, mesh and shape.
     """
     _check(outer_radius, thickness, material, fidelity, base, mesh)
-    check_nonnegative(max_force=max_force)
+    check_nonnegative(max_force=max_force, unit="N")
     if fidelity == "reissner":
         compliance = jnp.broadcast_to(_reissner_compliance(outer_radius, thickness, material), jnp.shape(max_force))
         return compliance if throw else (compliance, _successful(jnp.shape(max_force)))
@@ -262,7 +262,7 @@ def dome_curve(
         raise ValueError("give exactly one of travels (m) and max_force (N)")
     reissner = _reissner_compliance(outer_radius, thickness, material)
     if travels is None:
-        check_positive(max_force=max_force)
+        check_positive(max_force=max_force, unit="N")
         if int(n_points) != n_points or n_points < 1:
             raise ValueError(f"n_points must be a positive integer, got {n_points!r}")
         fractions = np.arange(1, n_points + 1) / n_points

@@ -51,7 +51,8 @@ def shape_factor(
 
     ``area`` pi a^2 (m^2) and ``thickness`` h (m), both > 0, broadcast together.
     """
-    check_positive(thickness=thickness, area=area)
+    check_positive(thickness=thickness, unit="m")
+    check_positive(area=area, unit="m^2")
     radius = jnp.sqrt(jnp.asarray(area) / jnp.pi)
     return radius / (2.0 * jnp.asarray(thickness))
 
@@ -66,7 +67,8 @@ def compression_modulus(
     """Effective modulus E_eff (Pa) in dP = E_eff dz / h; see the module docstring."""
     if fidelity not in FIDELITIES:
         raise ValueError(f"fidelity must be one of {FIDELITIES}, got {fidelity!r}")
-    check_positive(thickness=thickness, area=area)
+    check_positive(thickness=thickness, unit="m")
+    check_positive(area=area, unit="m^2")
     youngs = material.youngs_modulus
     if fidelity == "hooke":
         return jnp.broadcast_to(youngs, jnp.broadcast_shapes(jnp.shape(thickness), jnp.shape(area)))

@@ -114,7 +114,7 @@ class LinearElastic(AbstractMaterial):
     nu: Float[ArrayLike, ""]
 
     def __check_init__(self):
-        check_positive(E=self.E)
+        check_positive(E=self.E, unit="Pa")
         _check_poisson(self.nu)
 
     def strain_energy(self, F: Float[Array, "3 3"]) -> Float[Array, ""]:
@@ -157,12 +157,12 @@ class NeoHookean(AbstractHyperelastic):
     bulk: Float[ArrayLike, ""]
 
     def __check_init__(self):
-        check_positive(mu=self.mu, bulk=self.bulk)
+        check_positive(mu=self.mu, bulk=self.bulk, unit="Pa")
 
     @classmethod
     def from_youngs(cls, *, E: float, nu: float) -> "NeoHookean":
         """The neo-Hookean solid with small-strain Young's modulus E (Pa) and Poisson nu."""
-        check_positive(E=E)
+        check_positive(E=E, unit="Pa")
         _check_poisson(nu)
         return cls(mu=E / (2.0 * (1.0 + nu)), bulk=E / (3.0 * (1.0 - 2.0 * nu)))
 
@@ -193,10 +193,10 @@ class MooneyRivlin(AbstractHyperelastic):
     bulk: Float[ArrayLike, ""] | None = None
 
     def __check_init__(self):
-        check_positive(c10=self.c10)
-        check_nonnegative(c01=self.c01)
+        check_positive(c10=self.c10, unit="Pa")
+        check_nonnegative(c01=self.c01, unit="Pa")
         if self.bulk is not None:
-            check_positive(bulk=self.bulk)
+            check_positive(bulk=self.bulk, unit="Pa")
 
     def invariant_energy(self, i1, i2, j):
         return self.c10 * i1 + self.c01 * i2 + 0.5 * self.bulk_modulus * j**2

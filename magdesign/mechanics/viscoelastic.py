@@ -27,7 +27,8 @@ def lag_pole(
     time_constant: Float[ArrayLike, ""], sample_rate: Float[ArrayLike, ""]
 ) -> Float[Array, ""]:
     """Pole a = exp(-1 / (tau fs)) (-) of a lag with time constant tau (s) sampled at fs (Hz)."""
-    check_positive(time_constant=time_constant, sample_rate=sample_rate)
+    check_positive(time_constant=time_constant, unit="s")
+    check_positive(sample_rate=sample_rate, unit="Hz")
     return jnp.exp(-1.0 / (jnp.asarray(time_constant) * sample_rate))
 
 

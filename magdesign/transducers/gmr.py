@@ -83,14 +83,15 @@ class SpinValve(eqx.Module):
     offset: Float[ArrayLike, ""] = 0.0
 
     def __check_init__(self):
-        check_positive(resistance=self.resistance, sensitivity=self.sensitivity)
-        check_nonnegative(bias_current=self.bias_current)
+        check_positive(resistance=self.resistance, unit="Ohm")
+        check_positive(sensitivity=self.sensitivity, unit="1/T")
+        check_nonnegative(bias_current=self.bias_current, unit="A")
         if self.linear_range is not None:
-            check_positive(linear_range=self.linear_range)
+            check_positive(linear_range=self.linear_range, unit="T")
             if self.saturation_field is None:
                 raise ValueError("saturation_field is needed when linear_range is given")
             excess = jnp.asarray(self.saturation_field) - self.linear_range
-            check_positive(**{"saturation_field - linear_range": excess})
+            check_positive(**{"saturation_field - linear_range": excess}, unit="T")
 
     def effective_field(
         self,

@@ -116,8 +116,9 @@ class Hall3D(eqx.Module):
     noise_std: Float[Array, "3"] = eqx.field(converter=_per_axis, default=0.0)
 
     def __check_init__(self):
-        check_positive(lsb=self.lsb, full_scale=self.full_scale, gain=self.gain)
-        check_nonnegative(noise_std=self.noise_std)
+        check_positive(lsb=self.lsb, full_scale=self.full_scale, unit="T")
+        check_positive(gain=self.gain)
+        check_nonnegative(noise_std=self.noise_std, unit="T")
 
     def __call__(
         self,

@@ -435,9 +435,10 @@ def test_on_axis_gradients_match_finite_differences():
 
 
 def test_bad_input():
-    with pytest.raises(ValueError, match="radius"):
+    # the message names the argument and its unit
+    with pytest.raises(ValueError, match=r"radius must be positive and finite \(in m\)"):
         cylinder(np.zeros(3), radius=0.0, height=D, polarization=J)
-    with pytest.raises(ValueError, match="height"):
+    with pytest.raises(ValueError, match=r"height .*\(in m\)"):
         cylinder(np.zeros(3), radius=R, height=-1e-3, polarization=J)
     with pytest.raises(ValueError, match="points"):
         cylinder(np.zeros((4, 2)), radius=R, height=D, polarization=J)

@@ -64,9 +64,9 @@ def test_jit_vmap_grad_finite():
 @pytest.mark.parametrize(
     "kwargs, name",
     [
-        (dict(thickness=0.0, area=1e-6), "thickness"),
+        (dict(thickness=0.0, area=1e-6), r"thickness .*\(in m\)"),
         (dict(thickness=-1e-3, area=1e-6), "thickness"),
-        (dict(thickness=1e-3, area=0.0), "area"),
+        (dict(thickness=1e-3, area=0.0), r"area .*\(in m\^2\)"),
         (dict(thickness=1e-3, area=1e-6, fidelity="exact"), "fidelity"),
     ],
 )
