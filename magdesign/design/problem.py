@@ -21,9 +21,12 @@ from magdesign._validation import _concrete
 
 
 def _scalar(name, value):
-    """A float64 scalar: numpy where concrete (cheap to read back), else the tracer."""
+    """A float64 scalar: a read-only numpy copy where concrete (cheap to read back; a copy,
+    so that the problem does not change when the caller's array does), else the tracer."""
     concrete = _concrete(value)
-    array = jnp.asarray(value, dtype=jnp.float64) if concrete is None else np.asarray(concrete, np.float64)
+    array = jnp.asarray(value, dtype=jnp.float64) if concrete is None else np.array(concrete, np.float64)
+    if concrete is not None:
+        array.flags.writeable = False
     if array.shape != ():
         raise ValueError(f"{name} must be a scalar, got shape {array.shape}")
     if concrete is not None and not np.isfinite(array):
@@ -222,8 +225,9 @@ class Problem(eqx.Module):
 
 def per_problem(fn):
     """Memoise ``fn(problem)`` (host-side facts about a problem: arrays, names, layouts)
-    for as long as that problem object lives. A Problem is immutable, and a solve of a
-    small problem costs less than recomputing these from its fields each call."""
+    for as long as that problem object lives: a solve of a small problem costs less than
+    recomputing these from its fields each call. A Problem's own numbers are read-only
+    copies (see _scalar); arrays inside its model are read once per problem object."""
     cache = {}
 
     @functools.wraps(fn)

@@ -39,14 +39,15 @@ def _keys(problem):
 
 class _Layout(NamedTuple):
     """A problem's names as a result shows them: its variables, model outputs
-    (``Problem.outputs``), theta keys (:func:`_keys`: targets first, then limit rows),
-    (output, side) of each limit row, and display units."""
+    (``Problem.outputs``), number of targets, theta keys (:func:`_keys`: targets first,
+    then limit rows), (output, side) of each limit row, and display units (shared by
+    every result of the problem: copy before changing)."""
 
-    names: list
+    names: tuple
     outputs: tuple
     n_targets: int
-    keys: list
-    limit_rows: list
+    keys: tuple
+    limit_rows: tuple
     units: dict
 
 
@@ -56,8 +57,9 @@ def _layout(problem):
     units.update({t.output: t.unit for t in problem.targets})
     units.update({lim.output: lim.unit for lim in problem.limits})
     units.update(problem.report_units)
-    limit_rows = [(problem.limits[i].output, side) for i, side in problem.limit_rows]
-    return _Layout([v.name for v in problem.variables], problem.outputs, len(problem.targets), _keys(problem), limit_rows, units)
+    limit_rows = tuple((problem.limits[i].output, side) for i, side in problem.limit_rows)
+    names = tuple(v.name for v in problem.variables)
+    return _Layout(names, problem.outputs, len(problem.targets), tuple(_keys(problem)), limit_rows, units)
 
 
 def format_quantity(value: float, unit: str | None) -> str:
@@ -250,10 +252,7 @@ class DesignSweep(eqx.Module):
             output = problem.limits[i].output
             entry = limits.setdefault(output, {"achieved": outputs[output], "active": np.zeros(shape, bool)})
             entry["active"] = entry["active"] | grid(solution.active_limits[:, k])
-        units = {v.name: v.unit for v in problem.variables}
-        units.update({t.output: t.unit for t in problem.targets})
-        units.update({lim.output: lim.unit for lim in problem.limits})
-        units.update(problem.report_units)
+        units = dict(_layout(problem).units)
         units.update(over_units or {})
         return cls(
             over={key: grid(values) for key, values in (over or {}).items()},

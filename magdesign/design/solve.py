@@ -591,7 +591,7 @@ def _packed(problem, y0, theta, settings):
 def _unpack(problem, packed):
     """CoreSolution of numpy arrays from :func:`_packed`'s vector(s) (leading batch axes kept)."""
     parts = {name: packed[..., start:stop] for name, (start, stop) in _host(problem).layout.items()}
-    batch, n = packed.shape[:-1], len(problem.variables)
+    batch, n, p = packed.shape[:-1], len(problem.variables), len(_host(problem).theta)
     return CoreSolution(
         x=parts["x"],
         multipliers=parts["multipliers"],
@@ -600,7 +600,7 @@ def _unpack(problem, packed):
         active_limits=parts["active_limits"] > 0.5,
         at_lower=parts["at_lower"] > 0.5,
         at_upper=parts["at_upper"] > 0.5,
-        derivatives=parts["derivatives"].reshape(*batch, n, -1),
+        derivatives=parts["derivatives"].reshape(*batch, n, p),
         status=parts["status"][..., 0].astype(int),
         steps=parts["steps"][..., 0].astype(int),
     )
@@ -634,14 +634,16 @@ class _Host(NamedTuple):
 @per_problem
 def _host(problem):
     arrays = problem_arrays(problem, np)
-    lower, _, scale, start, theta = arrays
+    for array in arrays:  # shared by every solve of the problem
+        array.flags.writeable = False
+    theta = arrays[4]
     key, leaves = _split(problem)
     n, m, k = len(problem.variables), len(problem.targets) + len(problem.limit_rows), len(problem.outputs)
     sizes = {"x": n, "multipliers": m, "outputs": k, "residuals": m, "active_limits": m - len(problem.targets),
              "at_lower": n, "at_upper": n, "derivatives": n * len(theta), "status": 1, "steps": 1}
     stops = np.cumsum(list(sizes.values())).tolist()
     layout = {name: (stop - size, stop) for (name, size), stop in zip(sizes.items(), stops)}
-    return _Host(arrays, jax.device_put((start - lower) / scale), jax.device_put(theta), key,
+    return _Host(arrays, jax.device_put(_start(problem, None, arrays)), jax.device_put(theta), key,
                  jax.device_put(leaves), layout)
 
 
@@ -847,7 +849,7 @@ def multistart(
     batch = {np.shape(value) for value in starts.values()}
     if len(batch) != 1 or len(next(iter(batch))) != 1:
         raise ValueError(f"starts: give one (batch,) array per variable, got shapes {sorted(batch)}")
-    arrays = problem_arrays(problem, np)
+    arrays = _host(problem).arrays
     y0 = _start(problem, starts, arrays)
     y0 = np.broadcast_to(y0, (next(iter(batch))[0], len(problem.variables)))
     thetas = np.repeat(arrays[4][None, :], y0.shape[0], axis=0)

@@ -17,7 +17,7 @@ from jaxtyping import ArrayLike
 from magdesign._numerics import DESIGN_ATOL, DESIGN_RTOL
 from magdesign.design.problem import Problem
 from magdesign.design.report import DesignSweep
-from magdesign.design.solve import _start, problem_arrays, settings_of, solve_batch
+from magdesign.design.solve import _host, _start, settings_of, solve_batch
 from magdesign.scene import parameters
 
 
@@ -112,7 +112,7 @@ def sweep(
     rows = [t.output for t in problem.targets] + [f"{problem.limits[i].output}.{side}" for i, side in problem.limit_rows]
     problem = with_fixed(problem, [key for key in points if key not in rows])
     columns = rows + list(problem.fixed_names)
-    arrays = problem_arrays(problem, np)
+    arrays = _host(problem).arrays
     count = int(np.prod(shape))
     thetas = np.repeat(arrays[4][None, :], count, axis=0)
     for key, column in points.items():

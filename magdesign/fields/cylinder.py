@@ -366,9 +366,10 @@ NEAR, FAR, MIXED = 0, 1, 2
 
 def _zoned_jet(s, z, far, zone, b, names, regime):
     """The jet of points all NEAR (inside the switch sphere), all FAR, or MIXED (both
-    computed, each point's own selected). Each pair of names is one loop over the points
-    (see _materialized); it computes only its own two entries (the integrals with
-    p = gamma^2 only for z and u)."""
+    computed, each point's own selected). NEAR and MIXED: each pair of names is one loop
+    over the points (see _materialized), computing only its own two entries (the
+    integrals with p = gamma^2 only for z and u); FAR: each name its own real loop (the
+    series share little work, and XLA vectorises real loops, not complex ones)."""
     if zone == FAR:
         return _materialized(_far_jet(s, z, b, tuple(names)), s, paired=False)
     out = {}

@@ -145,7 +145,7 @@ def soft_body(
     check_positive(size=size, unit="m")
     check_positive(permeability=permeability)
     if saturation is not None:
-        check_positive(saturation=saturation)
+        check_positive(saturation=saturation, unit="T")
         check_positive(**{"permeability - 1 (a saturating body needs mu_r > 1)": jnp.asarray(permeability) - 1.0})
         saturation = jnp.asarray(saturation, dtype=size.dtype)
     sides = {"cuboid": size, "cylinder": size[jnp.array([0, 0, 1])], "sphere": jnp.repeat(size, 3)}[shape]

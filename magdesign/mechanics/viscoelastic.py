@@ -36,7 +36,8 @@ def time_constant_from_pole(
     pole: Float[ArrayLike, ""], sample_rate: Float[ArrayLike, ""]
 ) -> Float[Array, ""]:
     """Time constant tau = -1 / (fs ln a) (s) of the discrete pole 0 < a < 1 at fs (Hz)."""
-    check_positive(pole=pole, one_minus_pole=1.0 - jnp.asarray(pole), sample_rate=sample_rate)
+    check_positive(pole=pole, one_minus_pole=1.0 - jnp.asarray(pole))
+    check_positive(sample_rate=sample_rate, unit="Hz")
     return -1.0 / (sample_rate * jnp.log(pole))
 
 

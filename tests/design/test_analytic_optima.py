@@ -14,6 +14,7 @@ from scipy.optimize import brentq
 
 from dome_hall_model import default_problem
 from magdesign.design import Limit, Objective, Problem, Target, Variable, multistart, solve, sweep
+from magdesign.design.problem import per_problem
 from magdesign.fields import cylinder_on_axis, film_magnitude
 from magdesign.mechanics import dome_compliance
 from magdesign.units import mm, mT
@@ -286,3 +287,33 @@ def test_each_new_problem_is_solved_as_itself():
         assert result.successful
         assert result.parameters["x"] == pytest.approx(math.sqrt(value), rel=1e-9)
         assert result.targets["square"]["target"] == value
+
+
+def test_a_problem_keeps_its_numbers_when_the_callers_array_changes():
+    # a Problem holds copies: changing the array it was built from later changes nothing
+    # (the solver keeps per-problem arrays; a shared array would make them stale)
+    lower = np.array(0.5)
+    problem = Problem(lambda p: {"square": p["x"] ** 2}, [Variable("x", lower, 3.0, start=1.0)], [Target("square", 2.0)])
+    lower[...] = 1.6  # above sqrt(2): had the problem seen it, x would stop at 1.6
+    result = solve(problem)
+    assert result.successful and result.parameters["x"] == pytest.approx(math.sqrt(2.0), rel=1e-9)
+
+
+def test_per_problem_recomputes_for_a_new_object_with_a_dropped_ones_id():
+    class Thing:
+        pass
+
+    calls = []
+    memo = per_problem(lambda thing: calls.append(1) or len(calls))
+    first = Thing()
+    assert memo(first) == 1 and memo(first) == 1
+    dropped = id(first)
+    del first
+    kept = []  # kept alive, so that each new object takes fresh memory until one reuses the dropped id
+    for _ in range(10_000):
+        kept.append(Thing())
+        if id(kept[-1]) == dropped:
+            break
+    else:
+        pytest.skip("no new object took the dropped one's id")
+    assert memo(kept[-1]) == 2
