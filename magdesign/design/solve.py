@@ -590,8 +590,9 @@ def _packed(problem, y0, theta, settings):
 
 def _unpack(problem, packed):
     """CoreSolution of numpy arrays from :func:`_packed`'s vector(s) (leading batch axes kept)."""
-    parts = {name: packed[..., start:stop] for name, (start, stop) in _host(problem).layout.items()}
-    batch, n, p = packed.shape[:-1], len(problem.variables), len(_host(problem).theta)
+    host = _host(problem)
+    parts = {name: packed[..., start:stop] for name, (start, stop) in host.layout.items()}
+    batch, n, p = packed.shape[:-1], len(problem.variables), len(host.theta)
     return CoreSolution(
         x=parts["x"],
         multipliers=parts["multipliers"],

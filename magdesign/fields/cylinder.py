@@ -438,14 +438,14 @@ def _materialized(values, s, paired=True):
     (:func:`magdesign.fields._special.materialize`): packed two by two into complex arrays
     where ``paired`` (results that share expensive work), else each alone, as an odd one
     out is, in a real loop."""
-    names, arrays, out = list(values), list(values.values()), {}
-    step = 2 if paired else 1
-    for i in range(0, len(names), step):
-        if i + 1 < len(names) and paired:
-            pair = materialize(arrays[i], arrays[i + 1], 1.0 + s)
-            out.update(zip(names[i : i + 2], (jnp.real(pair), jnp.imag(pair))))
-        else:
-            out[names[i]] = materialize(arrays[i], None, 1.0 + s)
+    names = list(values)
+    packed = 2 * (len(names) // 2) if paired else 0
+    out = {}
+    for a, b in zip(names[0:packed:2], names[1:packed:2]):
+        pair = materialize(values[a], values[b], 1.0 + s)
+        out.update({a: jnp.real(pair), b: jnp.imag(pair)})
+    for name in names[packed:]:
+        out[name] = materialize(values[name], None, 1.0 + s)
     return out
 
 
