@@ -40,8 +40,10 @@ out-of-balance force is below DOME_RESIDUAL_TOL mu t^2. Two controls: the plate 
 held (the natural control: it passes limit points where the force falls) or the force held
 (d an unknown, Pi - F d minimised). The path followers (:func:`follow_travels`,
 :func:`first_crossings`) step the plate travel adaptively from the undeformed dome with a
-secant predictor. Their equilibria are differentiated implicitly (:func:`implicit`: a custom
-JVP solving with the same tangent), so derivatives with respect to geometry, material,
+secant predictor; a force level that a step carried is solved from the cubic Hermite
+interpolant of that step's ends, whose tangents come from Newton's last Hessian. Their
+equilibria are differentiated implicitly (:func:`implicit`: a custom JVP solving with the
+same tangent), so derivatives with respect to geometry, material,
 travel and force are exact whatever the iterations did, in forward and reverse mode and to
 any order.
 """
@@ -93,6 +95,9 @@ PATH_HARD_ITER = 16
 # further. A failed jump ends the path.
 SNAP_STEP = 1e-2
 SNAP_MAX_ITER = 60
+# Bisections of the interval of a path step that find where its Hermite interpolated
+# force meets a level (2^-50: the travel to rounding).
+HERMITE_BISECTIONS = 50
 
 _GAUSS3 = np.polynomial.legendre.leggauss(3)
 
@@ -373,8 +378,9 @@ def _tolerance(params):
 
 def newton(mesh, mask, held, force, params, y0, max_iter):
     """Minimise Pi - force d over the unknowns (mask 1) from y0, the others held at
-    ``held``: (state, converged, iterations). Converged: the largest entry of the
-    residual (an out-of-balance force, N) is at most :func:`_tolerance`."""
+    ``held``: (state, converged, iterations, the Hessian of the potential at the state).
+    Converged: the largest entry of the residual (an out-of-balance force, N) is at most
+    :func:`_tolerance`."""
     tol = _tolerance(params)
     y0 = mask * y0 + (1 - mask) * held
     unit = _unit_last(mesh)
@@ -386,7 +392,6 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
     def linearise(y):
         g, H = derivatives(mesh, y, params)
         g = mask * (g - force * unit)
-        H = mask[:, None] * H * mask[None, :] + jnp.diag(1 - mask)
         return g, H, jnp.max(jnp.abs(g))
 
     def cond(carry):
@@ -395,7 +400,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
 
     def body(carry):
         y, g, H, _, it, _ = carry
-        dy = _cho_solve(_factor(H), g)
+        dy = _cho_solve(_factor(_restricted(H, mask)), g)
         pi0, slope = energy(y), jnp.dot(g, dy)
         slack = DOME_LINE_SEARCH_SLACK * jnp.abs(pi0)
 
@@ -409,8 +414,13 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         return y, g, H, size, it + 1, alpha <= 2.0**-LINE_SEARCH_MAX
 
     g, H, size = linearise(y0)
-    y, _, _, size, iterations, _ = lax.while_loop(cond, body, (y0, g, H, size, 0, False))
-    return y, size <= tol, iterations
+    y, _, H, size, iterations, _ = lax.while_loop(cond, body, (y0, g, H, size, 0, False))
+    return y, size <= tol, iterations, H
+
+
+def _restricted(H, mask):
+    """H on the unknowns (mask 1), the identity on the held values."""
+    return mask[:, None] * H * mask[None, :] + jnp.diag(1 - mask)
 
 
 def _control(mesh, force_control, value):
@@ -447,7 +457,9 @@ def _implicit_jvp(mesh, control, primals, tangents):
         _, r_dot = jax.jvp(r, (params, value), (params_dot, value_dot))
         mask = _control(mesh, force_control, value)[0]
         _, H = derivatives(mesh, y, params)
-        L = _factor(mask[:, None] * H * mask[None, :] + jnp.diag(1 - mask))
+        # only the solve's matvec is differentiated (custom_linear_solve): a factor with
+        # tangents would cost second derivatives a Cholesky derivative per direction
+        L = _factor(lax.stop_gradient(_restricted(H, mask)))
 
         def hessian_times(v):
             return H @ v
@@ -468,11 +480,14 @@ def _implicit_jvp(mesh, control, primals, tangents):
 
 class Path(eqx.Module):
     """A point of a followed force-travel path: the state y (size,) at travel y[-1] (m),
-    its plate force (N), the state before it (for the secant predictor), the next travel
-    step (m), and the count of steps tried. ``failed``: a snap's jump did not converge."""
+    its plate force (N), its tangent dy/dd (size,) and stiffness dF/dd (N/m) along the
+    path, the state before it (for the secant predictor), the next travel step (m), and
+    the count of steps tried. ``failed``: a snap's jump did not converge."""
 
     y: jax.Array
     force: jax.Array
+    tangent: jax.Array
+    stiffness: jax.Array
     previous: jax.Array
     step: jax.Array
     count: jax.Array
@@ -482,10 +497,22 @@ class Path(eqx.Module):
         return ~self.failed & (self.count < PATH_MAX_STEPS) & (self.y[-1] < max_travel)
 
 
-def _start_path(mesh, step):
+def _tangent(mesh, H):
+    """(dy/dd (size,), dF/dd (N/m)) along the travel-held equilibria through a state whose
+    Hessian is H: the unknowns' rows of the tangent system with the travel moving, t[-1] = 1."""
+    mask = mesh.mask(False)
+    tangent = -_cho_solve(_factor(_restricted(H, mask)), mask * H[:, -1])
+    tangent = tangent.at[-1].set(1.0)
+    return tangent, H[-1] @ tangent
+
+
+def _start_path(mesh, params, step):
     """The undeformed dome as the start of a path, with first travel step ``step`` (m)."""
     zero = jnp.zeros(mesh.size)
-    return Path(zero, jnp.zeros(()), zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False))
+    tangent, stiffness = _tangent(mesh, derivatives(mesh, zero, params)[1])
+    return Path(
+        zero, jnp.zeros(()), tangent, stiffness, zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False)
+    )
 
 
 def _path_guess(path, goal, thickness):
@@ -504,20 +531,49 @@ def _path_guess(path, goal, thickness):
     return guess, d_new, max_iter, jump
 
 
-def _path_update(mesh, params, path, y_new, ok, iterations, jump):
+def _path_update(mesh, params, path, y_new, H_new, ok, iterations, jump):
     """The path after Newton's answer to :func:`_path_guess`: a converged step is taken
     (the next step doubles if it was easy, halves if it was hard; after a jump the secant
     starts afresh); a failed one is refused and the step cut to a quarter."""
     factor = jnp.where(iterations <= PATH_EASY_ITER, 2.0, jnp.where(iterations >= PATH_HARD_ITER, 0.5, 1.0))
     step = jnp.where(ok, jnp.maximum(path.step, SNAP_STEP * params[1]) * factor, path.step / 4)
+    tangent, stiffness = lax.cond(
+        ok, lambda: _tangent(mesh, H_new), lambda: (path.tangent, path.stiffness)
+    )
     return Path(
         y=jnp.where(ok, y_new, path.y),
         force=jnp.where(ok, plate_force(mesh, y_new, params), path.force),
+        tangent=tangent,
+        stiffness=stiffness,
         previous=jnp.where(ok, jnp.where(jump, y_new, path.y), path.previous),
         step=step,
         count=path.count + 1,
         failed=~ok & jump,
     )
+
+
+def _hermite_guess(before: Path, after: Path, level):
+    """A state under the plate force ``level`` (N) between two points of a path with
+    before.force < level <= after.force: the cubic Hermite interpolants of the force and
+    the state in the travel, from their values and tangents at both ends, the force's
+    inverted by bisection (a path step spans up to half the wall, over which a straight
+    line between the states is far from equilibrium and makes Newton damp its steps)."""
+    h = after.y[-1] - before.y[-1]
+
+    def at(s, v0, t0, v1, t1):
+        return (
+            (2 * s**3 - 3 * s**2 + 1) * v0 + (s**3 - 2 * s**2 + s) * h * t0
+            + (3 * s**2 - 2 * s**3) * v1 + (s**3 - s**2) * h * t1
+        )
+
+    def halve(_, bracket):
+        low, high = bracket
+        middle = 0.5 * (low + high)
+        below = at(middle, before.force, before.stiffness, after.force, after.stiffness) < level
+        return jnp.where(below, middle, low), jnp.where(below, high, middle)
+
+    low, high = lax.fori_loop(0, HERMITE_BISECTIONS, halve, (jnp.zeros(()), jnp.ones(())))
+    return at(0.5 * (low + high), before.y, before.tangent, after.y, after.tangent)
 
 
 def follow_travels(mesh, params, travels, step):
@@ -529,15 +585,15 @@ def follow_travels(mesh, params, travels, step):
     def advance(path, goal):
         guess, d_new, max_iter, jump = _path_guess(path, goal, params[1])
         mask, held, force = _control(mesh, False, d_new)
-        y, ok, iterations = newton(mesh, mask, held, force, params, guess, max_iter)
-        return _path_update(mesh, params, path, y, ok, iterations, jump)
+        y, ok, iterations, H = newton(mesh, mask, held, force, params, guess, max_iter)
+        return _path_update(mesh, params, path, y, H, ok, iterations, jump)
 
     def to(path, goal):
         path = eqx.tree_at(lambda p: p.count, path, jnp.asarray(0))
         path = lax.while_loop(lambda p: (p.y[-1] < goal) & p.can_go_on(jnp.inf), lambda p: advance(p, goal), path)
         return path, (path.y, path.y[-1] >= goal, path.failed)
 
-    _, (states, reached, failed) = lax.scan(to, _start_path(mesh, step), travels)
+    _, (states, reached, failed) = lax.scan(to, _start_path(mesh, params, step), travels)
     return states, reached, failed
 
 
@@ -561,28 +617,28 @@ def first_crossings(mesh, params, levels, max_travel, step):
     followed from the undeformed dome (first step ``step``, m) up to the travel
     ``max_travel`` (m). Each loop turn makes one Newton solve: a step of the path with the
     travel held, or, once a step has carried a level, that level's solve with the force
-    held, from the states before and after interpolated in force; so one compiled Newton
-    serves both. Not differentiated (see :func:`implicit`)."""
+    held, from the cubic Hermite interpolant of the step's two ends (their states,
+    forces and tangents along the path); so one compiled Newton serves both. Not differentiated (see :func:`implicit`)."""
     k = levels.shape[0]
     blank = jnp.zeros((k, mesh.size))
     on_level = lambda mask, now, old: jnp.where(mask.reshape((k,) + (1,) * (now.ndim - 1)), now, old)  # noqa: E731
 
     def cond(carry):
-        path, before, after, f_before, f_after, found, solved, _ = carry
+        path, _, found, solved, _ = carry
         return jnp.any(found & ~solved) | (~jnp.all(found) & path.can_go_on(max_travel))
 
     def body(carry):
-        path, before, after, f_before, f_after, found, solved, c = carry
+        # The path does not move while levels it crossed are pending: they all lie
+        # between ``before`` and ``path``.
+        path, before, found, solved, c = carry
         pending = found & ~solved
         level = jnp.argmax(pending)
         solving = pending[level]
-        span = f_after[level] - f_before[level]
-        w = jnp.clip((levels[level] - f_before[level]) / jnp.where(span > 0, span, 1.0), 0.0, 1.0)
         guess, d_new, max_iter, jump = _path_guess(path, max_travel, params[1])
-        guess = jnp.where(solving, (1 - w) * before[level] + w * after[level], guess)
+        guess = jnp.where(solving, _hermite_guess(before, path, levels[level]), guess)
         max_iter = jnp.where(solving, NEWTON_MAX_ITER, max_iter)
         mask, held, force = _control(mesh, solving, jnp.where(solving, levels[level], d_new))
-        y, ok, iterations = newton(mesh, mask, held, force, params, guess, max_iter)
+        y, ok, iterations, H = newton(mesh, mask, held, force, params, guess, max_iter)
 
         just = jnp.arange(k) == level
         c = eqx.tree_at(
@@ -590,19 +646,16 @@ def first_crossings(mesh, params, levels, max_travel, step):
             c,
             (on_level(just & solving, jnp.broadcast_to(y, blank.shape), c.states), jnp.where(just & solving, ok, c.converged)),
         )
-        new = _path_update(mesh, params, path, y, ok & ~solving, iterations, jump)
+        new = _path_update(mesh, params, path, y, H, ok & ~solving, iterations, jump)
         new = jax.tree.map(lambda a, b: jnp.where(solving, b, a), new, path)
         crossed = ~solving & ok & ~found & (new.force >= levels)
-        before = on_level(crossed, jnp.broadcast_to(path.y, blank.shape), before)
-        after = on_level(crossed, jnp.broadcast_to(new.y, blank.shape), after)
-        f_before = jnp.where(crossed, path.force, f_before)
-        f_after = jnp.where(crossed, new.force, f_after)
-        return new, before, after, f_before, f_after, found | crossed, solved | (just & solving), c
+        before = jax.tree.map(lambda a, b: jnp.where(jnp.any(crossed), a, b), path, before)
+        return new, before, found | crossed, solved | (just & solving), c
 
     none = jnp.zeros(k, bool)
     c = Crossings(blank, levels, none, none, jnp.asarray(False), jnp.asarray(False))
-    start = (_start_path(mesh, step), blank, blank, jnp.zeros(k), jnp.zeros(k), none, none, c)
-    path, _, _, _, _, found, _, c = lax.while_loop(cond, body, start)
+    start = _start_path(mesh, params, step)
+    path, _, found, _, c = lax.while_loop(cond, body, (start, start, none, none, c))
     return Crossings(
         states=on_level(found, c.states, jnp.broadcast_to(path.y, blank.shape)),
         forces=jnp.where(found, levels, path.force),
