@@ -618,7 +618,8 @@ def first_crossings(mesh, params, levels, max_travel, step):
     ``max_travel`` (m). Each loop turn makes one Newton solve: a step of the path with the
     travel held, or, once a step has carried a level, that level's solve with the force
     held, from the cubic Hermite interpolant of the step's two ends (their states,
-    forces and tangents along the path); so one compiled Newton serves both. Not differentiated (see :func:`implicit`)."""
+    forces and tangents along the path); so one compiled Newton serves both. Not
+    differentiated (see :func:`implicit`)."""
     k = levels.shape[0]
     blank = jnp.zeros((k, mesh.size))
     on_level = lambda mask, now, old: jnp.where(mask.reshape((k,) + (1,) * (now.ndim - 1)), now, old)  # noqa: E731
