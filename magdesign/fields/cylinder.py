@@ -384,10 +384,14 @@ def _zoned_jet(s, z, far, zone, b, names, regime):
     return out
 
 
-# Points per chunk of a partitioned call; calls of at least two chunks are partitioned
-# (see _partitioned; also _derived's series). At 1e6 points in a box of +-10 radii,
-# chunks of 8192 to 32768 points measured alike, within the timing noise.
-PARTITION_CHUNK = 16384
+# Points per chunk of the near points of a partitioned call; calls of at least two chunks
+# are partitioned (see _partitioned; also _derived's series), unless more than MOSTLY_NEAR
+# of their points are near. Measured on 2 cores (interleaved against the partition before
+# 2026-11-25, best of 5-7, 1e4 to 1e6 points with 4 % to 100 % of them near): chunks of
+# 1024 to 16384 points alike within the noise at 1e5 and 1e6 points, 2048 or less faster
+# at 1e4; above 3/4 near both kernels elementwise beat the near points in chunks.
+PARTITION_CHUNK = 2048
+MOSTLY_NEAR = 3 / 4
 
 
 def _is_large(s):
@@ -395,42 +399,45 @@ def _is_large(s):
 
 
 def _partitioned(s, z, far, zoned):
-    """``zoned(s, z, far, zone)`` at every point, each point computed only in its own zone.
+    """``zoned(s, z, far, zone)`` at every point, each point's value from its own zone.
 
-    Elementwise code computes both zones at every point and selects. Here the points are
-    sorted, those near the magnet first (a stable partition by one cumulative sum), and
-    taken in chunks of PARTITION_CHUNK: a chunk runs a zone's kernel only if it holds
-    points of that zone (the one chunk that holds both runs both). In a box of +-10
-    radii about the seed-001 magnet 96 % of the points are far, and the near kernel (the
-    elliptic integrals) costs more than twice the far series."""
+    Elementwise code computes both zones at every point and selects. Here, unless more
+    than MOSTLY_NEAR of the points are near (in a box of +-10 radii about the seed-001
+    magnet 4 % are), the far series (the cheap kernel) run elementwise over every point;
+    then the near points alone, gathered in chunks of PARTITION_CHUNK (their indices in
+    order, from one cumulative sum), go through the elliptic integrals and are written
+    over their far values. Why this shape, measured at 1e6 points on 2 cores: XLA on CPU
+    splits a large elementwise loop over the cores only outside loops (in a loop the far
+    series ran at half their speed; the paired near kernel, a complex loop, runs on one
+    core anywhere), and each full-size array (sorted copies, chunked outputs, a final
+    select) cost 1-3 ms. The loop runs as many chunks as the near points fill. A call
+    with more near points computes both kernels elementwise and selects. (A while loop:
+    forward-mode derivatives pass through it; the field's own derivatives come from its
+    custom JVP.)
+    """
     shape, n = s.shape, s.size
     s, z, far = s.reshape(-1), z.reshape(-1), far.reshape(-1)
-    chunks = -(-n // PARTITION_CHUNK)
-    near = (~far).astype(jnp.int32)
-    near_before = jnp.cumsum(near) - near
-    near_count = near_before[-1] + near[-1]
-    index = jnp.arange(n, dtype=jnp.int32)
-    # each point's place in the sorted order: its rank among the near points, or after them
-    place = jnp.where(far, near_count + index - near_before, near_before)
-    # the points in sorted order; the padding of the last chunk repeats point 0
-    order = jnp.zeros(chunks * PARTITION_CHUNK, jnp.int32).at[place].set(index, unique_indices=True)
-    sorted_s, sorted_z = (a[order].reshape(chunks, PARTITION_CHUNK) for a in (s, z))
+    near_count = n - jnp.sum(far, dtype=jnp.int32)
 
-    shapes = jax.eval_shape(lambda a, b: zoned(a, b, None, NEAR), sorted_s[0], sorted_z[0])
-    skipped = {name: jnp.zeros(shape.shape, shape.dtype) for name, shape in shapes.items()}
+    def chunk(i, arrays):
+        near_index, values = arrays
+        index = jax.lax.dynamic_slice(near_index, (i * PARTITION_CHUNK,), (PARTITION_CHUNK,))
+        s_c, z_c = (a.at[index].get(mode="clip") for a in (s, z))  # padding: the last point, dropped below
+        near_values = zoned(s_c, z_c, None, NEAR)
+        return near_index, {name: values[name].at[index].set(near_values[name], mode="drop") for name in values}
 
-    def chunk(_, arrays):
-        start, s_c, z_c = arrays
-        # each zone's kernel only where the chunk holds some of its points
-        near_values = jax.lax.cond(start < near_count, lambda: zoned(s_c, z_c, None, NEAR), lambda: skipped)
-        holds_far = (start + PARTITION_CHUNK > near_count) & (near_count < n)  # not the padding alone
-        far_values = jax.lax.cond(holds_far, lambda: zoned(s_c, z_c, None, FAR), lambda: skipped)
-        far_c = start + jnp.arange(PARTITION_CHUNK, dtype=jnp.int32) >= near_count
-        return None, {name: jnp.where(far_c, far_values[name], near_values[name]) for name in near_values}
+    def mostly_far():
+        near = (~far).astype(jnp.int32)
+        # the near points' indices in order, then n (out of bounds) as padding
+        slots = -(-n // PARTITION_CHUNK) * PARTITION_CHUNK
+        near_index = jnp.full(slots, n, jnp.int32).at[jnp.where(far, slots, jnp.cumsum(near) - near)].set(
+            jnp.arange(n, dtype=jnp.int32), mode="drop", unique_indices=True
+        )
+        filled = lambda i, arrays: jax.lax.cond(i * PARTITION_CHUNK < near_count, chunk, lambda i, a: a, i, arrays)  # noqa: E731
+        return jax.lax.fori_loop(0, slots // PARTITION_CHUNK, filled, (near_index, zoned(s, z, None, FAR)))[1]
 
-    starts = jnp.arange(chunks, dtype=jnp.int32) * PARTITION_CHUNK
-    _, values = jax.lax.scan(chunk, None, (starts, sorted_s, sorted_z))
-    return {name: value.reshape(-1)[place].reshape(shape) for name, value in values.items()}
+    values = jax.lax.cond(near_count > MOSTLY_NEAR * n, lambda: zoned(s, z, far, MIXED), mostly_far)
+    return {name: value.reshape(shape) for name, value in values.items()}
 
 
 def _materialized(values, s, paired=True):

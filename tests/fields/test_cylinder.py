@@ -285,9 +285,10 @@ def _in_small_calls(f, *arrays, size=143):
 
 @pytest.mark.parametrize("aspect", [1e-3, 2 / 3, 10.0])
 def test_a_large_call_evaluates_each_point_in_its_own_zone(aspect, monkeypatch):
-    """A call of at least 2 PARTITION_CHUNK points sorts its points, near the magnet first,
-    and runs each zone's kernel (and the near-axis series) only where needed. Chunks of
-    256 points here (several wholly near, one mixed, several far; the last one padded).
+    """A call of at least 2 PARTITION_CHUNK points runs the far series at every point and
+    the near kernel (and the near-axis series) only on its near points, in chunks (256
+    points here, the last one padded), or, when most of its points are near, both kernels
+    at every point.
     Against magpylib (independent; points off the axis, see
     test_any_direction_agrees_with_magpylib) and against the same points in small calls,
     which select per point, with and without points on the axis, for values, derivatives
@@ -303,6 +304,7 @@ def test_a_large_call_evaluates_each_point_in_its_own_zone(aspect, monkeypatch):
     points = rng.uniform(-1, 1, size=(count, 3)) * switch
     with_axis = points.copy()
     with_axis[::50, :2] = 0.0
+    mostly_near = 0.5 * points  # every point inside the switch sphere: both kernels, selected
     directions = rng.normal(size=(count, 3))
 
     def value(p):
@@ -312,7 +314,7 @@ def test_a_large_call_evaluates_each_point_in_its_own_zone(aspect, monkeypatch):
     def tangent(p, d):
         return jax.jvp(lambda q, h: cylinder(q, radius=radius, height=h, polarization=polarization), (p, height), (d, 1e-3 * height))[1]
 
-    for p in (points, with_axis):
+    for p in (points, with_axis, mostly_near):
         ours = np.asarray(jax.jit(value)(p))
         scale = np.linalg.norm(ours, axis=-1)
         np.testing.assert_array_less(np.linalg.norm(ours - _in_small_calls(jax.jit(value), p), axis=-1), 1e-13 * scale)
