@@ -506,10 +506,11 @@ def _tangent(mesh, H):
     return tangent, H[-1] @ tangent
 
 
-def _start_path(mesh, params, step):
-    """The undeformed dome as the start of a path, with first travel step ``step`` (m)."""
+def _start_path(mesh, params, step, tangents=True):
+    """The undeformed dome as the start of a path, with first travel step ``step`` (m);
+    its tangent zero unless ``tangents`` (a path whose tangents are read)."""
     zero = jnp.zeros(mesh.size)
-    tangent, stiffness = _tangent(mesh, derivatives(mesh, zero, params)[1])
+    tangent, stiffness = _tangent(mesh, derivatives(mesh, zero, params)[1]) if tangents else (zero, jnp.zeros(()))
     return Path(
         zero, jnp.zeros(()), tangent, stiffness, zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False)
     )
@@ -534,10 +535,12 @@ def _path_guess(path, goal, thickness):
 def _path_update(mesh, params, path, y_new, H_new, ok, iterations, jump):
     """The path after Newton's answer to :func:`_path_guess`: a converged step is taken
     (the next step doubles if it was easy, halves if it was hard; after a jump the secant
-    starts afresh); a failed one is refused and the step cut to a quarter."""
+    starts afresh); a failed one is refused and the step cut to a quarter. ``H_new``:
+    the Hessian at ``y_new``, for the new tangent; None keeps the path's tangent (a path
+    whose tangents are not read)."""
     factor = jnp.where(iterations <= PATH_EASY_ITER, 2.0, jnp.where(iterations >= PATH_HARD_ITER, 0.5, 1.0))
     step = jnp.where(ok, jnp.maximum(path.step, SNAP_STEP * params[1]) * factor, path.step / 4)
-    tangent, stiffness = lax.cond(
+    tangent, stiffness = (path.tangent, path.stiffness) if H_new is None else lax.cond(
         ok, lambda: _tangent(mesh, H_new), lambda: (path.tangent, path.stiffness)
     )
     return Path(
@@ -585,15 +588,15 @@ def follow_travels(mesh, params, travels, step):
     def advance(path, goal):
         guess, d_new, max_iter, jump = _path_guess(path, goal, params[1])
         mask, held, force = _control(mesh, False, d_new)
-        y, ok, iterations, H = newton(mesh, mask, held, force, params, guess, max_iter)
-        return _path_update(mesh, params, path, y, H, ok, iterations, jump)
+        y, ok, iterations, _ = newton(mesh, mask, held, force, params, guess, max_iter)
+        return _path_update(mesh, params, path, y, None, ok, iterations, jump)
 
     def to(path, goal):
         path = eqx.tree_at(lambda p: p.count, path, jnp.asarray(0))
         path = lax.while_loop(lambda p: (p.y[-1] < goal) & p.can_go_on(jnp.inf), lambda p: advance(p, goal), path)
         return path, (path.y, path.y[-1] >= goal, path.failed)
 
-    _, (states, reached, failed) = lax.scan(to, _start_path(mesh, params, step), travels)
+    _, (states, reached, failed) = lax.scan(to, _start_path(mesh, params, step, tangents=False), travels)
     return states, reached, failed
 
 
