@@ -252,7 +252,7 @@ def _multipole_coefficients(b, dtype, along_b):
     m = np.array(_MULTIPOLE_ORDERS)
     b = jnp.asarray(b, dtype)
     powers = m * b ** (m - 1) if along_b else b**m
-    w = jnp.asarray(_MULTIPOLE_MATRIX, dtype) @ powers
+    w = jnp.dot(jnp.asarray(_MULTIPOLE_MATRIX, dtype), powers, precision=jax.lax.Precision.HIGHEST)  # no TF32 / bf16 passes
     return {l: w[k] for k, l in enumerate(_MULTIPOLE_ORDERS)}
 
 
@@ -361,8 +361,9 @@ def _jet(s, z, b, names, branch):
 
     ``branch`` (see _branch): a Python int picks one regime at trace time; an array picks
     at run time (lax.switch; under vmap every regime runs and the result is selected).
-    A call of at least 2 PARTITION_CHUNK points takes :func:`_partitioned`: each point
-    is evaluated only in its own zone."""
+    A call of at least 2 PARTITION_CHUNK points takes :func:`_partitioned`: the far
+    series at every point, the elliptic integrals only at its near points (unless most
+    of its points are near)."""
     far = s + z * z > MULTIPOLE_SWITCH**2 * (1.0 + b * b)
 
     def regime_jet(regime):
@@ -426,8 +427,9 @@ def _partitioned(s, z, far, zoned):
     core anywhere), and each full-size array (sorted copies, chunked outputs, a final
     select) cost 1-3 ms. The loop visits every chunk's place and skips those beyond the
     near points (a fixed trip count, which reverse-mode derivatives of the field's own
-    derivatives need; 489 skipped visits at 1e6 points cost about 3 ms). A call with more
-    near points computes both kernels elementwise and selects.
+    derivatives need; at 1e6 points its 489 visits, most of them skipped, cost about 3
+    ms). A call with more near points computes both kernels elementwise and selects.
+    Under a vmap whose lanes differ in their near count, both branches run.
     """
     shape, n = s.shape, s.size
     s, z, far = s.reshape(-1), z.reshape(-1), far.reshape(-1)
@@ -438,14 +440,21 @@ def _partitioned(s, z, far, zoned):
         index = jax.lax.dynamic_slice(near_index, (i * PARTITION_CHUNK,), (PARTITION_CHUNK,))
         s_c, z_c = (a.at[index].get(mode="clip") for a in (s, z))  # padding: the last point, dropped below
         near_values = zoned(s_c, z_c, None, NEAR)
-        return near_index, {name: values[name].at[index].set(near_values[name], mode="drop") for name in values}
+        return near_index, {
+            name: values[name].at[index].set(near_values[name], mode="drop", unique_indices=True, indices_are_sorted=True)
+            for name in values
+        }
 
     def mostly_far():
         near = (~far).astype(jnp.int32)
-        # the near points' indices in order, then n (out of bounds) as padding
+        # The near points' indices in order, then padding past the last point. Every index
+        # unique (far points go out of bounds, each to its own place, and are dropped): a
+        # scatter with unique indices has a cheap derivative (second derivatives of the
+        # field pass through this one).
         slots = -(-n // PARTITION_CHUNK) * PARTITION_CHUNK
-        near_index = jnp.full(slots, n, jnp.int32).at[jnp.where(far, slots, jnp.cumsum(near) - near)].set(
-            jnp.arange(n, dtype=jnp.int32), mode="drop", unique_indices=True
+        index = jnp.arange(n, dtype=jnp.int32)
+        near_index = (n + jnp.arange(slots, dtype=jnp.int32)).at[jnp.where(far, slots + index, jnp.cumsum(near) - near)].set(
+            index, mode="drop", unique_indices=True
         )
         filled = lambda i, arrays: jax.lax.cond(i * PARTITION_CHUNK < near_count, chunk, lambda i, a: a, i, arrays)  # noqa: E731
         return jax.lax.fori_loop(0, slots // PARTITION_CHUNK, filled, (near_index, zoned(s, z, None, FAR)))[1]
