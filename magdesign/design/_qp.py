@@ -35,6 +35,20 @@ _TO_BOUNDARY = 0.99
 _ACTIVE_SET_ROUNDS = 6
 
 
+def where_needed(needed, compute, operands, otherwise):
+    """``compute(operands)`` where ``needed`` (a bool), else ``otherwise`` (a pytree
+    shaped like its result). A while loop of at most one trip: under vmap it runs only if
+    some lane needs it, where a ``lax.cond`` would become a select that always runs
+    ``compute``. The operands enter the loop through a select on its trip flag, so that
+    XLA cannot hoist ``compute`` out of the loop as invariant (and always run it)."""
+
+    def body(carry):
+        ran = carry[1]
+        return compute(jax.tree.map(lambda a: jnp.where(ran, jnp.zeros_like(a), a), operands)), jnp.asarray(True)
+
+    return jax.lax.while_loop(lambda carry: needed & ~carry[1], body, (otherwise, jnp.asarray(False)))[0]
+
+
 class QPSolution(eqx.Module):
     """w (nw,) the minimiser; y (me,) the equality multipliers and z (mi,) >= 0 the
     inequality ones, so that Q w + q + A^T y + G^T z = 0; converged: residuals below tol;
@@ -140,11 +154,14 @@ def solve_qp(Q, q, A, b, G, h, *, guess=None, tol=1e-12, max_iterations=60) -> Q
     # Start where the dual and equality residuals vanish (the KKT system with s = -z, as
     # cvxopt does), then shift s and z into the positive orthant: a start at z = 1 takes
     # dozens of iterations to grow multipliers of the elastic slacks' size, or diverges.
-    matrix = jnp.block([[Q, A.T, G.T], [A, jnp.zeros((me, me + mi))], [G, jnp.zeros((mi, me)), -jnp.eye(mi)]])
-    first = jnp.linalg.solve(matrix, jnp.concatenate([-q, b, h]))
-    w0, y0, z0 = first[:nw], first[nw : nw + me], first[nw + me :]
-    shift = lambda v: v + jnp.maximum(0.0, 1.0 - jnp.min(v, initial=1.0))  # noqa: E731
-    state = (w0, y0, shift(z0), shift(-z0), jnp.asarray(0))
+    def interior_start(operands):
+        Q, q, A, b, G, h = operands
+        matrix = jnp.block([[Q, A.T, G.T], [A, jnp.zeros((me, me + mi))], [G, jnp.zeros((mi, me)), -jnp.eye(mi)]])
+        first = jnp.linalg.solve(matrix, jnp.concatenate([-q, b, h]))
+        w0, y0, z0 = first[:nw], first[nw : nw + me], first[nw + me :]
+        shift = lambda v: v + jnp.maximum(0.0, 1.0 - jnp.min(v, initial=1.0))  # noqa: E731
+        return w0, y0, shift(z0), shift(-z0)
+
     if guess is None:
         guessed = jnp.asarray(False)
     else:
@@ -161,6 +178,8 @@ def solve_qp(Q, q, A, b, G, h, *, guess=None, tol=1e-12, max_iterations=60) -> Q
             lambda st: ~st[4] & (st[5] < _ACTIVE_SET_ROUNDS), active_set_round, first_round
         )
     # Not a lax.cond: under vmap both branches would run, the loop to its end.
+    ones = jnp.ones(mi)
+    state = (*where_needed(~guessed, interior_start, (Q, q, A, b, G, h), (jnp.zeros(nw), jnp.zeros(me), ones, ones)), jnp.asarray(0))
     state = jax.lax.while_loop(lambda st: ~guessed & ~done(st)[0] & (st[4] < max_iterations), body, state)
     w, y, z, _, iterations = state
     converged = done(state)[0]

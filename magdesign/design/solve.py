@@ -69,7 +69,7 @@ from magdesign._numerics import (
     TINY,
     safe_div,
 )
-from magdesign.design._qp import solve_qp
+from magdesign.design._qp import solve_qp, where_needed
 from magdesign.design.problem import Problem, per_problem
 from magdesign.design.report import DesignResult, DesignStatus, DesignSweep
 
@@ -366,7 +366,13 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         slope = jnp.dot(gradient, step.d) - nu * (_violation(jet.v[1:], n_targets) - step.linear_violation)
         slope = jnp.minimum(slope, 0.0)
         stationary = jnp.max(jnp.abs(step.d)) <= xtol
-        curvature, v = _least_curvature(jet, step, bound_multipliers, state.weight, n_targets)
+        # Only a stationary point's curvature is read (the costliest part of a step).
+        curvature, v = where_needed(
+            stationary & (problem.objective is not None),
+            lambda operands: _least_curvature(*operands, n_targets),
+            (jet, step, bound_multipliers, state.weight),
+            (jnp.zeros(()), jnp.zeros(n)),
+        )
         # Leave a saddle downhill (or, where flat, towards the side with more room).
         v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
         v = jnp.where((jnp.dot(gradient, v) == 0.0) & (_room(y, -v, y_max) > _room(y, v, y_max)), -v, v)
