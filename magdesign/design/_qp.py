@@ -169,8 +169,12 @@ def solve_qp(Q, q, A, b, G, h, *, guess=None, tol=1e-12, max_iterations=60) -> Q
         def active_set_round(round_state):
             rows, _, _, _, _, k = round_state
             w, y, z, ok = _solve_on_active_set(Q, q, A, b, G, h, rows, tol)
-            # The rows to keep: those with a positive multiplier, and those violated.
-            rows = jnp.where(ok, rows, (z > 0.0) | (G @ w - h > tol * (1.0 + jnp.abs(h))))
+            # Next: the kept rows with a positive multiplier, and the dropped rows that are
+            # violated. A dropped row's multiplier is zero only up to the solve's rounding
+            # (1e-10 beside the slacks' 1e6), and must not bring it back: where its row was
+            # parallel to a kept one (two limits on one quantity) the next solve was singular.
+            violated = G @ w - h > tol * (1.0 + jnp.abs(h))
+            rows = jnp.where(ok, rows, jnp.where(rows, z > 0.0, violated))
             return rows, w, y, z, ok, k + 1
 
         first_round = (guess, jnp.zeros(nw), jnp.zeros(me), jnp.zeros(mi), jnp.asarray(False), jnp.asarray(0))
