@@ -181,9 +181,10 @@ def solve_qp(Q, q, A, b, G, h, *, guess=None, tol=1e-12, max_iterations=60) -> Q
         _, w_g, y_g, z_g, guessed, _ = jax.lax.while_loop(
             lambda st: ~st[4] & (st[5] < _ACTIVE_SET_ROUNDS), active_set_round, first_round
         )
-    # Not a lax.cond: under vmap both branches would run, the loop to its end.
     ones = jnp.ones(mi)
-    state = (*where_needed(~guessed, interior_start, (Q, q, A, b, G, h), (jnp.zeros(nw), jnp.zeros(me), ones, ones)), jnp.asarray(0))
+    start = where_needed(~guessed, interior_start, (Q, q, A, b, G, h), (jnp.zeros(nw), jnp.zeros(me), ones, ones))
+    state = (*start, jnp.asarray(0))
+    # Not a lax.cond: under vmap both branches would run, the loop to its end.
     state = jax.lax.while_loop(lambda st: ~guessed & ~done(st)[0] & (st[4] < max_iterations), body, state)
     w, y, z, _, iterations = state
     converged = done(state)[0]

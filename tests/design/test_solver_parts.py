@@ -1,0 +1,81 @@
+"""Parts of the design solver checked on their own: the one-trip loop that runs work only
+where a vmapped lane needs it, the polish's custom derivative of its KKT residual (against
+plain forward-mode differentiation of the same residual), and the QP's active-set rounds on
+a subproblem that once sent a whole batch to the interior-point method."""
+
+import importlib
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from magdesign.design import Limit, Objective, Problem, Target, Variable
+from magdesign.design.spec import default_spec, problem_from_spec
+from magdesign.design.sweep import with_fixed
+from magdesign.units import mm
+
+solver = importlib.import_module("magdesign.design.solve")
+qp = importlib.import_module("magdesign.design._qp")
+
+
+def test_where_needed_under_vmap_computes_only_the_needed_lanes():
+    x = jnp.arange(6.0)
+    needed = jnp.array([True, False, True, False, False, True])
+    got = jax.vmap(lambda flag, v: qp.where_needed(flag, lambda a: a**2 + 1.0, v, jnp.asarray(-1.0)))(needed, x)
+    np.testing.assert_array_equal(got, np.where(needed, np.arange(6.0) ** 2 + 1.0, -1.0))
+    assert qp.where_needed(jnp.asarray(False), lambda a: a + 1.0, jnp.asarray(2.0), jnp.asarray(7.0)) == 7.0
+
+
+def test_kkt_residual_derivatives_match_plain_forward_mode():
+    """A model with curvature in both variables and a fixed input (theta) inside it, with
+    one variable on a bound, one limit row held and one not."""
+
+    def model(v):
+        a = v["a"]
+        return {"f": a * v["x"] * v["y"] + v["x"] ** 3, "g": v["x"] ** 2 + a * v["y"] ** 2, "h": jnp.sin(v["x"] * v["y"])}
+
+    problem = Problem(
+        model, [Variable("x", -2.0, 2.0), Variable("y", -2.0, 2.0)], targets=[Target("g", 1.5)],
+        limits=[Limit("h", upper=0.5), Limit("f", lower=-3.0)], objective=Objective("f", "min"), fixed={"a": 1.3},
+    )
+    theta = jnp.asarray(solver.problem_arrays(problem, np)[4])
+    active = solver._Active(jnp.array([True, False]), jnp.array([False, False]), jnp.array([False, True]))
+    kkt = solver._KKT(problem, jnp.asarray(0.7), active, jnp.array([True, True, False]), jnp.array([1.0, 1.0]))
+    z = jnp.array([0.3, 0.6, 0.4, -0.2, 0.9])
+
+    def plain(z, theta):
+        return kkt(z, theta)[0]
+
+    def custom(z, theta):
+        return solver._kkt_residual(z, theta, kkt=kkt)
+
+    for argnum, point in ((0, z), (1, theta)):
+        expected = jax.jacfwd(plain, argnums=argnum)(z, theta)
+        got = jax.jacfwd(custom, argnums=argnum)(z, theta)
+        np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-13)
+        assert np.any(np.asarray(expected) != 0.0), point
+    # Both tangents at once (z and theta together), as a single directional derivative.
+    dz, dtheta = jnp.linspace(-1.0, 1.0, z.size), jnp.linspace(0.5, -0.5, theta.size)
+    np.testing.assert_allclose(jax.jvp(custom, (z, theta), (dz, dtheta))[1], jax.jvp(plain, (z, theta), (dz, dtheta))[1],
+                               rtol=1e-13, atol=1e-13)
+
+
+def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
+    """The default design at outer radius 6 mm and compliance 0.2545 mm/N: its field limit
+    and closest-gap limit rows are parallel at the start. A dropped row's multiplier of 1e-10
+    (rounding) once brought the second back beside the first, the next solve was singular
+    and the QP went to 21 interior-point iterations (in a vmapped sweep, every lane did)."""
+    problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
+    problem = with_fixed(problem, ["mechanics.outer_radius"])
+    lower, upper, scale, start, theta = solver.problem_arrays(problem, np)
+    theta = theta.copy()
+    theta[0], theta[-1] = np.linspace(0.25, 0.4, 100)[5] * mm, 6.0 * mm
+    y0, y_max = jnp.asarray((start - lower) / scale), jnp.asarray((upper - lower) / scale)
+    jet = solver._jet(problem, y0, jnp.asarray(theta))
+    n, n_targets, m = y0.shape[0], len(problem.targets), jet.v.shape[0] - 1
+    parts = solver.subproblem(jet, y0, y_max, jnp.zeros(m), 1.0 / jnp.linalg.norm(jet.J[0]), n_targets, True)
+    guessed = qp.solve_qp(*parts, guess=solver._no_slack_rows(n, n_targets, m - n_targets))
+    reference = qp.solve_qp(*parts)
+    assert bool(guessed.converged) and int(guessed.iterations) == 0
+    assert int(reference.iterations) > 0
+    np.testing.assert_allclose(guessed.w, reference.w, rtol=0, atol=1e-9)
