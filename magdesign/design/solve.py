@@ -464,6 +464,11 @@ class _Active(eqx.Module):
     at_lower: Bool[Array, " n"]
     at_upper: Bool[Array, " n"]
 
+    @property
+    def fixed(self):
+        """(n,) the variables held on a bound."""
+        return self.at_lower | self.at_upper
+
     def fixed_residual(self, y, y_max):
         """(n,) each fixed variable's distance from its bound, 0 for the free ones."""
         return jnp.where(self.at_lower, y, jnp.where(self.at_upper, y - y_max, 0.0))
@@ -484,8 +489,7 @@ class _KKT(eqx.Module):
     def rows(self, y, lam, J, c):
         """The residual from the model's rows c and their Jacobian J (with the objective's)."""
         stationarity = self.weight * J[0] + J[1:].T @ lam
-        fixed = self.active.at_lower | self.active.at_upper
-        r_y = jnp.where(fixed, self.active.fixed_residual(y, self.y_max), stationarity)
+        r_y = jnp.where(self.active.fixed, self.active.fixed_residual(y, self.y_max), stationarity)
         return jnp.concatenate([r_y, jnp.where(self.equations, c, lam)])
 
     def __call__(self, z, theta):
@@ -511,9 +515,8 @@ def _kkt_residual_jvp(primals, tangents, *, kkt: _KKT):
     n = kkt.y_max.shape[0]
     y, lam, dy, dlam = z[:n], z[n:], dz[:n], dz[n:]
     jet = _jet(kkt.problem, y, theta)
-    fixed = kkt.active.at_lower | kkt.active.at_upper
     d_stationarity = _lagrangian_hessian(jet, lam, kkt.weight) @ dy + jet.J[1:].T @ dlam
-    dr = jnp.concatenate([jnp.where(fixed, dy, d_stationarity), jnp.where(kkt.equations, jet.J[1:] @ dy, dlam)])
+    dr = jnp.concatenate([jnp.where(kkt.active.fixed, dy, d_stationarity), jnp.where(kkt.equations, jet.J[1:] @ dy, dlam)])
     if dtheta is not None:
         dr = dr + jax.jvp(lambda theta: kkt(z, theta)[0], (theta,), (dtheta,))[1]
     return kkt.rows(y, lam, jet.J, jet.v[1:]), dr
@@ -534,8 +537,7 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
         def equations_of(y, theta):
             v, outputs = _values(problem, y, theta)
             c = v[1:]
-            fixed = active.at_lower | active.at_upper
-            r = jnp.concatenate([jnp.where(equations, c, 0.0), jnp.where(fixed, active.fixed_residual(y, y_max), 0.0)])
+            r = jnp.concatenate([jnp.where(equations, c, 0.0), active.fixed_residual(y, y_max)])
             return r, (outputs, c)
 
         # A root find with Newton steps through lineax's SVD: on these equations (more
