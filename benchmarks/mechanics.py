@@ -9,7 +9,9 @@ Prints
    with respect to outer radius, thickness, c10 and c01, and a second plain-Python call
    with a new thickness (which reuses the compiled program);
 3. the default design (examples/dome_hall.toml) at each dome level: first call (compile
-   included) and warm solve.
+   included) and warm solve;
+4. one factor and solve of the Newton tangent: the block tridiagonal factor
+   (magdesign.mechanics._blocks) against a dense Cholesky of the same matrix, per mesh.
 Timings are the best of REPEATS (first calls and the reference mesh: one each).
 """
 
@@ -17,11 +19,14 @@ import time
 
 import jax
 import jax.numpy as jnp
+import jax.scipy.linalg as jsl
+import numpy as np
+from jax import lax
 
 import magdesign  # noqa: F401  (float64)
 from magdesign.design import solve
 from magdesign.design.spec import default_spec, problem_from_spec
-from magdesign.mechanics import MooneyRivlin, dome_compliance, dome_curve
+from magdesign.mechanics import MooneyRivlin, _axisymmetric, _blocks, dome_compliance, dome_curve
 from magdesign.mechanics.dome import DEFAULT_MESH
 from magdesign.units import mm
 
@@ -115,7 +120,34 @@ def default_design():
         print(f"   {fidelity:<16}{first:>12.3g}{warm:>12.3g}{result.steps:>7}  {result.status}")
 
 
+def factor_costs(loops=50):
+    print("\n4. one factor and solve of the tangent (seed-001 dome, plate 0.2 mm in, force held)")
+    print(f"   {'mesh':<8}{'unknowns':>10}{'dense (ms)':>12}{'blocks (ms)':>13}{'difference':>12}")
+    params = (jnp.asarray(8 * mm), jnp.asarray(2 * mm), RESIN)
+    for shape in ((1, 12), DEFAULT_MESH, (4, 32)):
+        mesh = _axisymmetric.Mesh(*shape, "bonded")
+        _, H = _axisymmetric.derivatives(mesh, jnp.zeros(mesh.size).at[-1].set(0.2 * mm), params)
+        M = _axisymmetric._restricted(H, mesh.mask(True))
+        rhs = jnp.asarray(np.random.default_rng(0).standard_normal(mesh.size))
+        solvers = {
+            "dense": lambda A, r: jsl.cho_solve((jnp.linalg.cholesky(A), True), r),
+            "blocks": lambda A, r, m=mesh: _blocks.solve(m.layout, _blocks.factor(m.layout, A), r),
+        }
+        seconds, answers = {}, {}
+        for name, one in solvers.items():
+            # a loop of solves whose matrix and right side change, so none is hoisted
+            looped = jax.jit(lambda A, r, one=one: lax.fori_loop(
+                0, loops, lambda i, x: one(A + 1e-12 * i * jnp.eye(A.shape[0]), r + 1e-12 * x), r))
+            _, best, _ = _first_and_best(looped, M, rhs)
+            seconds[name] = best / loops
+            answers[name] = one(M, rhs)
+        difference = float(jnp.max(jnp.abs(answers["blocks"] - answers["dense"])) / jnp.max(jnp.abs(answers["dense"])))
+        print(f"   {shape[0]}x{shape[1]:<6}{mesh.size:>10}{seconds['dense'] * 1e3:>12.3f}"
+              f"{seconds['blocks'] * 1e3:>13.3f}{difference:>12.1e}")
+
+
 if __name__ == "__main__":
     mesh_convergence()
     call_costs()
     default_design()
+    factor_costs()

@@ -33,9 +33,9 @@ J), plus the rank-3 coupling of the projected Jbar; JAX differentiates only the
 five-argument densities. This is the Hessian of :func:`potential` to rounding (tested
 against ``jax.hessian``) at a tenth of the cost of differentiating the element energy.
 
-Solution. Newton's method on the total potential with the exact tangent, dense Cholesky
-(a few hundred unknowns), a Levenberg shift only where the tangent is not positive
-definite, and a backtracking line search on the potential; converged when the largest
+Solution. Newton's method on the total potential with the exact tangent, factored as a
+block tridiagonal matrix bordered by the plate travel (:mod:`._blocks`), a Levenberg
+shift only where the tangent is not positive definite, and a backtracking line search on the potential; converged when the largest
 out-of-balance force is below DOME_RESIDUAL_TOL mu t^2. Two controls: the plate travel
 held (the natural control: it passes limit points where the force falls) or the force held
 (d an unknown, Pi - F d minimised). The path followers (:func:`follow_travels`,
@@ -63,6 +63,7 @@ from magdesign._numerics import (
     DOME_RESIDUAL_TOL,
     smooth_ramp,
 )
+from magdesign.mechanics import _blocks
 from magdesign.mechanics.materials import excess_invariants
 
 # Penalty stiffness of the contact, kappa t / mu: the penetration it leaves is a 1/1000 of
@@ -167,6 +168,7 @@ class Mesh:
         phi[0::2] = corners
         phi[1::2] = 0.5 * (corners[:-1] + corners[1:])  # mid-nodes halfway along each arc
         self.phi = phi
+        self.layout = _blocks.Layout(self.rows, self.cols)
 
     def mask(self, force_control: bool) -> np.ndarray:
         """1 for the unknowns of a solve, 0 for held values: (n_dof + 1,)."""
@@ -345,30 +347,31 @@ def _unit_last(mesh):
     return np.append(np.zeros(mesh.n_dof), 1.0)
 
 
-def _factor(H):
-    """Cholesky factor of H + lambda I with the smallest tried shift lambda >= 0 that
-    makes it positive definite (lambda = 0 first, then DOME_LEVENBERG_START times the
-    largest diagonal entry, growing tenfold; the loop runs only where H itself fails)."""
+def _factor(mesh, H):
+    """Cholesky factor (:class:`_blocks.Factor`) of H + lambda I with the smallest tried
+    shift lambda >= 0 that makes it positive definite (lambda = 0 first, then
+    DOME_LEVENBERG_START times the largest diagonal entry, growing tenfold; the loop runs
+    only where H itself fails)."""
     scale = DOME_LEVENBERG_START * jnp.max(jnp.abs(jnp.diag(H)))
 
     def shifted(k):
-        return jnp.linalg.cholesky(H + scale * 10.0 ** (k - 1) * jnp.eye(H.shape[0]))
+        return _blocks.factor(mesh.layout, H + scale * 10.0 ** (k - 1) * jnp.eye(H.shape[0]))
 
     def cond(carry):
-        L, k = carry
-        return ~jnp.all(jnp.isfinite(L)) & (k <= LEVENBERG_MAX)
+        F, k = carry
+        return ~F.finite() & (k <= LEVENBERG_MAX)
 
-    L = jnp.linalg.cholesky(H)
-    L, _ = lax.cond(
-        jnp.all(jnp.isfinite(L)),
-        lambda: (L, 1),
+    F = _blocks.factor(mesh.layout, H)
+    F, _ = lax.cond(
+        F.finite(),
+        lambda: (F, 1),
         lambda: lax.while_loop(cond, lambda c: (shifted(c[1]), c[1] + 1), (shifted(1), 2)),
     )
-    return L
+    return F
 
 
-def _cho_solve(L, b):
-    return jax.scipy.linalg.cho_solve((L, True), b)
+def _cho_solve(mesh, F, b):
+    return _blocks.solve(mesh.layout, F, b)
 
 
 def _tolerance(params):
@@ -400,7 +403,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
 
     def body(carry):
         y, g, H, _, it, _ = carry
-        dy = _cho_solve(_factor(_restricted(H, mask)), g)
+        dy = _cho_solve(mesh, _factor(mesh, _restricted(H, mask)), g)
         pi0, slope = energy(y), jnp.dot(g, dy)
         slack = DOME_LINE_SEARCH_SLACK * jnp.abs(pi0)
 
@@ -459,7 +462,7 @@ def _implicit_jvp(mesh, control, primals, tangents):
         _, H = derivatives(mesh, y, params)
         # only the solve's matvec is differentiated (custom_linear_solve): a factor with
         # tangents would cost second derivatives a Cholesky derivative per direction
-        L = _factor(lax.stop_gradient(_restricted(H, mask)))
+        L = _factor(mesh, lax.stop_gradient(_restricted(H, mask)))
 
         def hessian_times(v):
             return H @ v
@@ -472,7 +475,7 @@ def _implicit_jvp(mesh, control, primals, tangents):
         def matvec(v):
             return mask * hessian_times(mask * v) + (1 - mask) * v
 
-        free_dot = lax.custom_linear_solve(matvec, b, lambda _, c: _cho_solve(L, c), symmetric=True)
+        free_dot = lax.custom_linear_solve(matvec, b, lambda _, c: _cho_solve(mesh, L, c), symmetric=True)
         return free_dot + held_dot
 
     return states, jax.vmap(state_tangent)(states, values, values_dot)
@@ -501,7 +504,7 @@ def _tangent(mesh, H):
     """(dy/dd (size,), dF/dd (N/m)) along the travel-held equilibria through a state whose
     Hessian is H: the unknowns' rows of the tangent system with the travel moving, t[-1] = 1."""
     mask = mesh.mask(False)
-    tangent = -_cho_solve(_factor(_restricted(H, mask)), mask * H[:, -1])
+    tangent = -_cho_solve(mesh, _factor(mesh, _restricted(H, mask)), mask * H[:, -1])
     tangent = tangent.at[-1].set(1.0)
     return tangent, H[-1] @ tangent
 

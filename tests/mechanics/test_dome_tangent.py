@@ -1,0 +1,71 @@
+"""The axisymmetric dome's tangent and its block factor, against jax.hessian and numpy.
+
+The Newton solves and the implicit derivatives of the dome rest on two pieces checked here
+directly: the assembled Hessian (from the densities' derivatives) against ``jax.hessian``
+of the total potential, and the block tridiagonal factor with its border (the plate
+travel) against numpy's dense solve of the same matrix.
+"""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from magdesign.mechanics import MooneyRivlin, _axisymmetric, _blocks
+
+RESIN = MooneyRivlin(c10=0.1182e6, c01=0.1769e6)
+PARAMS = (jnp.asarray(8e-3), jnp.asarray(2e-3), RESIN)
+# jitted: the mesh and the layout are static index tables
+derivatives = jax.jit(_axisymmetric.derivatives, static_argnums=0)
+hessian = jax.jit(jax.hessian(_axisymmetric.potential, argnums=1), static_argnums=0)
+gradient = jax.jit(jax.grad(_axisymmetric.potential, argnums=1), static_argnums=0)
+factor = jax.jit(_blocks.factor, static_argnums=0)
+solve = jax.jit(_blocks.solve, static_argnums=0)
+
+
+def pressed_state(mesh, amplitude=1e-9):
+    """The plate 0.2 mm into the undeformed wall, the displacements perturbed by
+    ``amplitude`` (m) at random: a positive definite tangent with the travel coupled to
+    the outer surface. (A deformed state that is not an equilibrium can have an
+    indefinite tangent: the nearly incompressible wall's pressure.)"""
+    rng = np.random.default_rng(1)
+    return jnp.asarray(np.append(amplitude * rng.standard_normal(mesh.n_dof) * mesh.free_u, 0.2e-3))
+
+
+@pytest.mark.parametrize("shape", [(1, 4), (2, 6)])
+def test_assembled_hessian_equals_jax_hessian_of_the_potential(shape):
+    mesh = _axisymmetric.Mesh(*shape, "bonded")
+    y = pressed_state(mesh, amplitude=1e-5)
+    g, H = derivatives(mesh, y, PARAMS)
+    free = np.append(mesh.free_u, 1.0)
+    g_ref = free * gradient(mesh, y, PARAMS)
+    H_ref = free[:, None] * hessian(mesh, y, PARAMS) * free[None, :]
+    np.testing.assert_allclose(g, g_ref, rtol=0, atol=1e-12 * np.max(np.abs(g_ref)))
+    np.testing.assert_allclose(H, H_ref, rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
+
+
+@pytest.mark.parametrize("shape", [(1, 12), (2, 16), (3, 5)])
+@pytest.mark.parametrize("force_control", [False, True])
+def test_block_factor_solves_as_numpy_does(shape, force_control):
+    mesh = _axisymmetric.Mesh(*shape, "bonded")
+    _, H = derivatives(mesh, pressed_state(mesh), PARAMS)
+    M = _axisymmetric._restricted(H, mesh.mask(force_control))
+    rhs = np.random.default_rng(2).standard_normal(mesh.size)
+    F = factor(mesh.layout, M)
+    assert bool(F.finite())
+    assert np.max(np.abs(M[:-1, -1])) > 0 if force_control else True  # the border is used
+    x = solve(mesh.layout, F, jnp.asarray(rhs))
+    x_ref = np.linalg.solve(np.asarray(M), rhs)
+    np.testing.assert_allclose(x, x_ref, rtol=0, atol=1e-9 * np.max(np.abs(x_ref)))
+
+
+def test_block_factor_flags_matrices_that_are_not_positive_definite():
+    mesh = _axisymmetric.Mesh(2, 6, "bonded")
+    _, H = derivatives(mesh, pressed_state(mesh), PARAMS)
+    M = _axisymmetric._restricted(H, mesh.mask(True))
+    assert bool(factor(mesh.layout, M).finite())
+    # a negative pivot in the displacements' blocks
+    assert not bool(factor(mesh.layout, M.at[40, 40].set(-1.0)).finite())
+    # positive definite displacements, but the travel's Schur complement negative
+    assert not bool(factor(mesh.layout, M.at[-1, -1].set(0.0)).finite())
+    assert np.all(np.linalg.eigvalsh(np.asarray(M.at[-1, -1].set(0.0)))[:1] < 0)
