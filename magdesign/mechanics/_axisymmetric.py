@@ -350,23 +350,21 @@ def _unit_last(mesh):
 def _factor(mesh, H):
     """Cholesky factor (:class:`_blocks.Factor`) of H + lambda I with the smallest tried
     shift lambda >= 0 that makes it positive definite (lambda = 0 first, then
-    DOME_LEVENBERG_START times the largest diagonal entry, growing tenfold; the loop runs
-    only where H itself fails)."""
+    DOME_LEVENBERG_START times the largest diagonal entry, growing tenfold). One loop
+    makes every try, so the program holds one factor (and a batch of matrices factors
+    again only while one of them needs a shift)."""
     scale = DOME_LEVENBERG_START * jnp.max(jnp.abs(jnp.diag(H)))
 
-    def shifted(k):
-        return _blocks.factor(mesh.layout, H + scale * 10.0 ** (k - 1) * jnp.eye(H.shape[0]))
+    def attempt(carry):
+        _, k = carry
+        return _blocks.factor(mesh.layout, H, jnp.where(k == 0, 0.0, scale * 10.0 ** (k - 1))), k + 1
 
     def cond(carry):
         F, k = carry
-        return ~F.finite() & (k <= LEVENBERG_MAX)
+        return (k == 0) | (~F.finite() & (k <= LEVENBERG_MAX))
 
-    F = _blocks.factor(mesh.layout, H)
-    F, _ = lax.cond(
-        F.finite(),
-        lambda: (F, 1),
-        lambda: lax.while_loop(cond, lambda c: (shifted(c[1]), c[1] + 1), (shifted(1), 2)),
-    )
+    untried = jax.tree.map(lambda a: jnp.full(a.shape, jnp.nan), jax.eval_shape(lambda H: _blocks.factor(mesh.layout, H), H))
+    F, _ = lax.while_loop(cond, attempt, (untried, 0))
     return F
 
 

@@ -69,3 +69,22 @@ def test_block_factor_flags_matrices_that_are_not_positive_definite():
     # positive definite displacements, but the travel's Schur complement negative
     assert not bool(factor(mesh.layout, M.at[-1, -1].set(0.0)).finite())
     assert np.all(np.linalg.eigvalsh(np.asarray(M.at[-1, -1].set(0.0)))[:1] < 0)
+
+
+def test_levenberg_shift_is_the_smallest_tried_that_makes_the_tangent_definite():
+    from magdesign._numerics import DOME_LEVENBERG_START
+
+    mesh = _axisymmetric.Mesh(2, 6, "bonded")
+    _, H = derivatives(mesh, pressed_state(mesh), PARAMS)
+    definite_M = _axisymmetric._restricted(H, mesh.mask(True))
+    rhs = np.random.default_rng(3).standard_normal(mesh.size)
+    shifted_solve = jax.jit(lambda M, r: _axisymmetric._cho_solve(mesh, _axisymmetric._factor(mesh, M), r))
+    for M in (definite_M, definite_M.at[40, 40].set(-1e-3 * definite_M[40, 40])):
+        x = shifted_solve(M, jnp.asarray(rhs))
+        scale = DOME_LEVENBERG_START * np.max(np.abs(np.diag(M)))
+        shifts = [0.0] + [scale * 10.0**k for k in range(_axisymmetric.LEVENBERG_MAX)]
+        definite = [np.linalg.eigvalsh(np.asarray(M) + s * np.eye(mesh.size))[0] > 0 for s in shifts]
+        chosen = shifts[definite.index(True)]
+        x_ref = np.linalg.solve(np.asarray(M) + chosen * np.eye(mesh.size), rhs)
+        np.testing.assert_allclose(x, x_ref, rtol=0, atol=1e-9 * np.max(np.abs(x_ref)))
+    assert chosen > 0  # the second matrix needed a shift
