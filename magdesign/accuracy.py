@@ -307,10 +307,11 @@ def measure(progress=None) -> list[Row]:
 
 def table(rows) -> str:
     """The rows as a readable table: error (relative, or um for decisions) beside time."""
-    lines = [f"{'model':<24}{'fidelity':<22}{'error':>14}{'time':>14}  per", "-" * 86]
+    width = max([24] + [len(row.model) + 2 for row in rows])
+    lines = [f"{'model':<{width}}{'fidelity':<22}{'error':>14}{'time':>14}  per", "-" * (width + 62)]
     for row in rows:
         error = f"{row.error / um:.3g} um" if row.unit == "m" else f"{row.error:.2e}"
-        lines.append(f"{row.model:<24}{row.fidelity:<22}{error:>14}{_seconds(row.seconds):>14}  {row.cases}")
+        lines.append(f"{row.model:<{width}}{row.fidelity:<22}{error:>14}{_seconds(row.seconds):>14}  {row.cases}")
     return "\n".join(lines)
 
 
