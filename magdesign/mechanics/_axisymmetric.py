@@ -35,8 +35,8 @@ against ``jax.hessian``) at a tenth of the cost of differentiating the element e
 
 Solution. Newton's method on the total potential with the exact tangent, factored as a
 block tridiagonal matrix bordered by the plate travel (:mod:`._blocks`), a Levenberg
-shift only where the tangent is not positive definite, and a backtracking line search on the potential; converged when the largest
-out-of-balance force is below DOME_RESIDUAL_TOL mu t^2. Two controls: the plate travel
+shift only where the tangent is not positive definite, and a backtracking line search on
+the potential; converged when the largest out-of-balance force is below DOME_RESIDUAL_TOL mu t^2. Two controls: the plate travel
 held (the natural control: it passes limit points where the force falls) or the force held
 (d an unknown, Pi - F d minimised). The path followers (:func:`follow_travels`,
 :func:`first_crossings`) step the plate travel adaptively from the undeformed dome with a
@@ -363,13 +363,9 @@ def _factor(mesh, H):
         F, k = carry
         return (k == 0) | (~F.finite() & (k <= LEVENBERG_MAX))
 
-    untried = jax.tree.map(lambda a: jnp.full(a.shape, jnp.nan), jax.eval_shape(lambda H: _blocks.factor(mesh.layout, H), H))
+    untried = jax.tree.map(lambda a: jnp.full(a.shape, jnp.nan, a.dtype), jax.eval_shape(lambda H: _blocks.factor(mesh.layout, H), H))
     F, _ = lax.while_loop(cond, attempt, (untried, 0))
     return F
-
-
-def _cho_solve(mesh, F, b):
-    return _blocks.solve(mesh.layout, F, b)
 
 
 def _tolerance(params):
@@ -401,7 +397,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
 
     def body(carry):
         y, g, H, _, it, _ = carry
-        dy = _cho_solve(mesh, _factor(mesh, _restricted(H, mask)), g)
+        dy = _blocks.solve(mesh.layout, _factor(mesh, _restricted(H, mask)), g)
         pi0, slope = energy(y), jnp.dot(g, dy)
         slack = DOME_LINE_SEARCH_SLACK * jnp.abs(pi0)
 
@@ -460,7 +456,7 @@ def _implicit_jvp(mesh, control, primals, tangents):
         _, H = derivatives(mesh, y, params)
         # only the solve's matvec is differentiated (custom_linear_solve): a factor with
         # tangents would cost second derivatives a Cholesky derivative per direction
-        L = _factor(mesh, lax.stop_gradient(_restricted(H, mask)))
+        F = _factor(mesh, lax.stop_gradient(_restricted(H, mask)))
 
         def hessian_times(v):
             return H @ v
@@ -473,7 +469,7 @@ def _implicit_jvp(mesh, control, primals, tangents):
         def matvec(v):
             return mask * hessian_times(mask * v) + (1 - mask) * v
 
-        free_dot = lax.custom_linear_solve(matvec, b, lambda _, c: _cho_solve(mesh, L, c), symmetric=True)
+        free_dot = lax.custom_linear_solve(matvec, b, lambda _, c: _blocks.solve(mesh.layout, F, c), symmetric=True)
         return free_dot + held_dot
 
     return states, jax.vmap(state_tangent)(states, values, values_dot)
@@ -502,7 +498,7 @@ def _tangent(mesh, H):
     """(dy/dd (size,), dF/dd (N/m)) along the travel-held equilibria through a state whose
     Hessian is H: the unknowns' rows of the tangent system with the travel moving, t[-1] = 1."""
     mask = mesh.mask(False)
-    tangent = -_cho_solve(mesh, _factor(mesh, _restricted(H, mask)), mask * H[:, -1])
+    tangent = -_blocks.solve(mesh.layout, _factor(mesh, _restricted(H, mask)), mask * H[:, -1])
     tangent = tangent.at[-1].set(1.0)
     return tangent, H[-1] @ tangent
 

@@ -7,10 +7,10 @@ tridiagonal, K = n_meridian + 1 blocks of b = 4 (2 n_wall + 1) unknowns (the ape
 group padded to b with unknowns of their own, an identity). The plate travel, last,
 couples with the u_z of the whole outer surface: a border row and column, eliminated
 through its Schur complement. The diagonal blocks' factors are kept inverted, so that a
-solve is matrix products only. A factor costs about K b^3 instead of (K b)^3 / 3: one
+solve is matrix products only. A factor costs a few K b^3 instead of (K b)^3 / 3: one
 factor and solve take 0.18 ms against a dense Cholesky's 0.77 ms on the default mesh
-(2 x 16, 331 unknowns) and 1.2 ms against 21 ms on the 4 x 32 mesh (1171), on one core
-(benchmarks/mechanics.py), with the same residual (a few 1e-12 of the right side).
+(2 x 16, 331 unknowns) and 1.2 ms against 19-21 ms on the 4 x 32 mesh (1171), on one
+core, the two solutions agreeing to 1.2e-14 relative (benchmarks/mechanics.py).
 """
 
 import equinox as eqx
@@ -22,8 +22,8 @@ from jax import lax
 
 
 class Layout:
-    """Static index tables of the blocks of a mesh with ``rows`` node rows of ``cols``
-    nodes (2 unknowns each) and the plate travel last.
+    """Static index tables of the blocks of a mesh with ``rows`` node rows (odd:
+    2 n_meridian + 1) of ``cols`` nodes (2 unknowns each) and the plate travel last.
 
     ``source`` (K, b): the unknown at each place of the padded blocks (0 at a pad);
     ``pad`` (K, b): the padding places; ``place`` (n_dof,): each unknown's place in the
@@ -31,6 +31,8 @@ class Layout:
     """
 
     def __init__(self, rows: int, cols: int):
+        if rows % 2 != 1:
+            raise ValueError(f"rows must be odd (2 n_meridian + 1), got {rows}")
         row_size = 2 * cols
         self.block = 2 * row_size
         self.count = (rows + 1) // 2
