@@ -36,16 +36,16 @@ against ``jax.hessian``) at a tenth of the cost of differentiating the element e
 Solution. Newton's method on the total potential with the exact tangent, factored as a
 block tridiagonal matrix bordered by the plate travel (:mod:`._blocks`), a Levenberg
 shift only where the tangent is not positive definite, and a backtracking line search on
-the potential; converged when the largest out-of-balance force is below DOME_RESIDUAL_TOL mu t^2. Two controls: the plate travel
-held (the natural control: it passes limit points where the force falls) or the force held
-(d an unknown, Pi - F d minimised). The path followers (:func:`follow_travels`,
-:func:`first_crossings`) step the plate travel adaptively from the undeformed dome with a
-secant predictor; a force level that a step carried is solved from the cubic Hermite
-interpolant of that step's ends, whose tangents come from Newton's last Hessian. Their
-equilibria are differentiated implicitly (:func:`implicit`: a custom JVP solving with the
-same tangent), so derivatives with respect to geometry, material,
-travel and force are exact whatever the iterations did, in forward and reverse mode and to
-any order.
+the potential; converged when the largest out-of-balance force is below DOME_RESIDUAL_TOL
+mu t^2. Two controls: the plate travel held (the natural control: it passes limit points
+where the force falls) or the force held (d an unknown, Pi - F d minimised). The path
+followers (:func:`follow_travels`, :func:`first_crossings`) step the plate travel
+adaptively from the undeformed dome with a secant predictor; a force level that a step
+carried is solved from the cubic Hermite interpolant of that step's ends, whose tangents
+come from Newton's last Hessian. Their equilibria are differentiated implicitly
+(:func:`implicit`: a custom JVP solving with the same tangent), so derivatives with
+respect to geometry, material, travel and force are exact whatever the iterations did, in
+forward and reverse mode and to any order.
 """
 
 import functools
@@ -363,7 +363,8 @@ def _factor(mesh, H):
         F, k = carry
         return (k == 0) | (~F.finite() & (k <= LEVENBERG_MAX))
 
-    untried = jax.tree.map(lambda a: jnp.full(a.shape, jnp.nan, a.dtype), jax.eval_shape(lambda H: _blocks.factor(mesh.layout, H), H))
+    shapes = jax.eval_shape(lambda H: _blocks.factor(mesh.layout, H), H)
+    untried = jax.tree.map(lambda a: jnp.full(a.shape, jnp.nan, a.dtype), shapes)
     F, _ = lax.while_loop(cond, attempt, (untried, 0))
     return F
 

@@ -86,7 +86,8 @@ def factor(layout: Layout, M, shift=0.0) -> Factor:
     it are ignored). Not positive definite: a factor that is not :meth:`Factor.finite`."""
     s, pad = layout.source, layout.pad
     eye = np.eye(layout.block)
-    diagonal = jnp.where(pad[:, :, None] | pad[:, None, :], eye * pad[:, :, None], M[s[:, :, None], s[:, None, :]] + shift * eye)
+    blocks = M[s[:, :, None], s[:, None, :]] + shift * eye
+    diagonal = jnp.where(pad[:, :, None] | pad[:, None, :], eye * pad[:, :, None], blocks)
     below = jnp.where(pad[1:, :, None] | pad[:-1, None, :], 0.0, M[s[1:, :, None], s[:-1, None, :]])
 
     def inverted_factor(D):
