@@ -501,17 +501,20 @@ class _KKT(eqx.Module):
 # The residual's derivative in z from the model's Hessians (n tangents through the model,
 # as in the search's jet), where jax.jacfwd would push all n + m directions of z through
 # the model's second derivatives (2 against 6 on the default design). Tangents in theta
-# (the implicit derivatives' right-hand side) go through the plain residual.
+# (the implicit derivatives' right-hand side) go through the plain residual. The aux
+# (outputs, c) rides along so that the polish reads them from its last evaluation; it is
+# never differentiated, and its tangent is zero.
 @eqx.filter_custom_jvp
 def _kkt_residual(z, theta, *, kkt: _KKT):
-    return kkt(z, theta)[0]
+    return kkt(z, theta)
 
 
 @_kkt_residual.def_jvp
 def _kkt_residual_jvp(primals, tangents, *, kkt: _KKT):
     (z, theta), (dz, dtheta) = primals, tangents
     if dz is None:
-        return jax.jvp(lambda theta: kkt(z, theta)[0], (theta,), (dtheta,))
+        out, (dr, _) = jax.jvp(lambda theta: kkt(z, theta), (theta,), (dtheta,))
+        return out, (dr, jax.tree.map(jnp.zeros_like, out[1]))
     n = kkt.y_max.shape[0]
     y, lam, dy, dlam = z[:n], z[n:], dz[:n], dz[n:]
     jet = _jet(kkt.problem, y, theta)
@@ -519,7 +522,19 @@ def _kkt_residual_jvp(primals, tangents, *, kkt: _KKT):
     dr = jnp.concatenate([jnp.where(kkt.active.fixed, dy, d_stationarity), jnp.where(kkt.equations, jet.J[1:] @ dy, dlam)])
     if dtheta is not None:
         dr = dr + jax.jvp(lambda theta: kkt(z, theta)[0], (theta,), (dtheta,))[1]
-    return kkt.rows(y, lam, jet.J, jet.v[1:]), dr
+    aux = (jet.outputs, jet.v[1:])
+    return (kkt.rows(y, lam, jet.J, jet.v[1:]), aux), (dr, jax.tree.map(jnp.zeros_like, aux))
+
+
+def _last_evaluated(solution):
+    """(z, largest residual entry, aux) at the last point where optimistix's Newton
+    evaluated the equations: its answer plus its last step (solution.state.diff, taken
+    from that point). Its residual and aux come with the solve, where evaluating them at
+    the answer would cost one more evaluation of the model; Newton stops when that step
+    is below its tolerances (far below the design's), and the answer's derivatives are
+    those of the root."""
+    z = solution.value + jax.lax.stop_gradient(solution.state.diff)
+    return z, jnp.max(jnp.abs(solution.state.f), initial=0.0), solution.aux
 
 
 def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, settings: Settings, y_max):
@@ -550,18 +565,17 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
             equations_of, optx.Newton(**solver_options), y, theta, has_aux=True,
             max_steps=settings.max_steps, adjoint=adjoint, throw=False,
         )
-        r, aux = equations_of(solution.value, theta)
-        return solution.value, jnp.zeros_like(multipliers), jnp.max(jnp.abs(r), initial=0.0), aux, solution.result
+        y, residual, aux = _last_evaluated(solution)
+        return y, jnp.zeros_like(multipliers), residual, aux, solution.result
 
     kkt = _KKT(problem, weight, active, equations, y_max)
     z0 = jnp.concatenate([y, jnp.where(equations, multipliers, 0.0)])
     solution = optx.root_find(
-        lambda z, theta: _kkt_residual(z, theta, kkt=kkt), optx.Newton(**solver_options), z0, theta,
+        lambda z, theta: _kkt_residual(z, theta, kkt=kkt), optx.Newton(**solver_options), z0, theta, has_aux=True,
         max_steps=settings.max_steps, adjoint=adjoint, throw=False,
     )
-    r, aux = kkt(solution.value, theta)
-    z = solution.value
-    return z[:n], z[n:], jnp.max(jnp.abs(r), initial=0.0), aux, solution.result
+    z, residual, aux = _last_evaluated(solution)
+    return z[:n], z[n:], residual, aux, solution.result
 
 
 def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:

@@ -47,7 +47,12 @@ def test_kkt_residual_derivatives_match_plain_forward_mode():
         return kkt(z, theta)[0]
 
     def custom(z, theta):
-        return solver._kkt_residual(z, theta, kkt=kkt)
+        return solver._kkt_residual(z, theta, kkt=kkt)[0]
+
+    # the aux (outputs, c) rides along unchanged, from the primal and from the rule
+    (_, aux), _ = jax.jvp(lambda z: solver._kkt_residual(z, theta, kkt=kkt), (z,), (jnp.ones_like(z),))
+    for got, expected in zip(jax.tree.leaves(aux), jax.tree.leaves(kkt(z, theta)[1])):
+        np.testing.assert_allclose(got, expected, rtol=1e-15)
 
     for argnum, point in ((0, z), (1, theta)):
         expected = jax.jacfwd(plain, argnums=argnum)(z, theta)
