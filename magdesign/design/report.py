@@ -254,6 +254,7 @@ class DesignSweep(eqx.Module):
             entry["active"] = entry["active"] | grid(solution.active_limits[:, k])
         units = dict(_layout(problem).units)
         units.update(over_units or {})
+        units.update({f"{key}.achieved": units.get(key) for key in over or {} if key in outputs})
         return cls(
             over={key: grid(values) for key, values in (over or {}).items()},
             status=grid(np.asarray(STATUS_NAMES)[np.asarray(solution.status)]),
@@ -287,11 +288,16 @@ class DesignSweep(eqx.Module):
         names, counts = np.unique(self.status, return_counts=True)
         return {str(name): int(count) for count, name in sorted(zip(counts, names), reverse=True)}
 
+    def _achieved(self) -> dict:
+        """The outputs, an output that is also a swept key (a target's value) named
+        "<output>.achieved", so that it does not hide the value asked for."""
+        return {(f"{name}.achieved" if name in self.over else name): values for name, values in self.outputs.items()}
+
     def columns(self) -> dict[str, np.ndarray]:
         """{column: (points,) values (SI)}, flattened in the grid's (C) order: the swept
-        inputs, status, parameters, outputs, steps, and each derivative as
-        "d(variable)/d(key)"."""
-        columns = {**self.over, "status": self.status, **self.parameters, **self.outputs, "steps": self.steps}
+        inputs, status, parameters, outputs (a swept target's as "<output>.achieved"),
+        steps, and each derivative as "d(variable)/d(key)"."""
+        columns = {**self.over, "status": self.status, **self.parameters, **self._achieved(), "steps": self.steps}
         for key, entry in self.derivatives.items():
             columns.update({f"d({name})/d({key})": values for name, values in entry.items()})
         return {name: np.ravel(values) for name, values in columns.items()}
@@ -323,7 +329,7 @@ class DesignSweep(eqx.Module):
     def table(self) -> str:
         """A readable table: one row per point with the swept inputs, the status, the
         parameters and the problem's outputs in their display units."""
-        columns = {**self.over, **self.parameters, **self.outputs}
+        columns = {**self.over, **self.parameters, **self._achieved()}
         names = list(columns)
         header = names[: len(self.over)] + ["status"] + names[len(self.over):]
         cells = [[f"{name} ({self.units.get(name)})" if self.units.get(name) else name for name in header]]

@@ -156,6 +156,12 @@ def test_command_writes_every_point_and_counts_the_failures(cheap_spec, tmp_path
     failed = [row for row in rows if row["status"] != "successful"]
     assert failed and code == 3
     assert f"8 points, {8 - len(failed)} successful, {len(failed)} not" in out
+    # the swept column keeps the value asked for, a failed point's too; what was reached
+    # has its own column
+    assert sorted({float(row["field_rest"]) for row in rows}) == pytest.approx([5 * mT, 30 * mT], rel=1e-12)
+    for row in failed:
+        assert float(row["field_rest"]) == pytest.approx(30 * mT, rel=1e-12)
+        assert float(row["field_rest.achieved"]) < 29 * mT
     for row in rows:
         if row["status"] == "successful":
             gap = gap_for(float(row["field_rest"]), float(row["magnet.remanence"]))
