@@ -289,13 +289,14 @@ class DesignSweep(eqx.Module):
         return {str(name): int(count) for count, name in sorted(zip(counts, names), reverse=True)}
 
     def _achieved(self) -> dict:
-        """The outputs, an output that is also a swept key (a target's value) named
-        "<output>.achieved", so that it does not hide the value asked for."""
+        """The outputs, one whose name is also a swept key (a target's output, or a fixed
+        input that the model also reports) named "<output>.achieved", so that it does not
+        hide the swept value."""
         return {(f"{name}.achieved" if name in self.over else name): values for name, values in self.outputs.items()}
 
     def columns(self) -> dict[str, np.ndarray]:
         """{column: (points,) values (SI)}, flattened in the grid's (C) order: the swept
-        inputs, status, parameters, outputs (a swept target's as "<output>.achieved"),
+        inputs, status, parameters, outputs (one named like a swept key as "<output>.achieved"),
         steps, and each derivative as "d(variable)/d(key)"."""
         columns = {**self.over, "status": self.status, **self.parameters, **self._achieved(), "steps": self.steps}
         for key, entry in self.derivatives.items():

@@ -49,10 +49,14 @@ def test_kkt_residual_derivatives_match_plain_forward_mode():
     def custom(z, theta):
         return solver._kkt_residual(z, theta, kkt=kkt)[0]
 
-    # the aux (outputs, c) rides along unchanged, from the primal and from the rule
-    (_, aux), _ = jax.jvp(lambda z: solver._kkt_residual(z, theta, kkt=kkt), (z,), (jnp.ones_like(z),))
-    for got, expected in zip(jax.tree.leaves(aux), jax.tree.leaves(kkt(z, theta)[1])):
-        np.testing.assert_allclose(got, expected, rtol=1e-15)
+    # the aux (outputs, c) rides along unchanged, with a zero tangent, from both branches
+    # of the rule: a tangent in z, and one in theta only
+    along_z = jax.jvp(lambda z: solver._kkt_residual(z, theta, kkt=kkt), (z,), (jnp.ones_like(z),))
+    along_theta = jax.jvp(lambda theta: solver._kkt_residual(z, theta, kkt=kkt), (theta,), (jnp.ones_like(theta),))
+    for (_, aux), (_, aux_dot) in (along_z, along_theta):
+        for got, expected in zip(jax.tree.leaves(aux), jax.tree.leaves(kkt(z, theta)[1])):
+            np.testing.assert_allclose(got, expected, rtol=1e-15)
+        assert all(np.all(np.asarray(leaf) == 0.0) for leaf in jax.tree.leaves(aux_dot))
 
     for argnum, point in ((0, z), (1, theta)):
         expected = jax.jacfwd(plain, argnums=argnum)(z, theta)
@@ -63,6 +67,35 @@ def test_kkt_residual_derivatives_match_plain_forward_mode():
     dz, dtheta = jnp.linspace(-1.0, 1.0, z.size), jnp.linspace(0.5, -0.5, theta.size)
     np.testing.assert_allclose(jax.jvp(custom, (z, theta), (dz, dtheta))[1], jax.jvp(plain, (z, theta), (dz, dtheta))[1],
                                rtol=1e-13, atol=1e-13)
+
+
+def test_polish_returns_the_residual_and_outputs_of_the_point_it_returns():
+    """The polish reads its residual and outputs from optimistix's last evaluation (Newton's
+    state and aux) instead of evaluating the model again; they must belong to the point it
+    returns. Cut to two Newton steps from a start off the root, so that the last step is
+    large and a residual or aux from another point would show."""
+    problem = Problem(
+        lambda v: {"f": v["x"] + 2.0 * v["y"], "r2": v["x"] ** 2 + v["y"] ** 2},
+        [Variable("x", -3.0, 3.0), Variable("y", -3.0, 3.0)], targets=[Target("r2", 2.0)], objective=Objective("f", "min"),
+    )
+    feasibility = Problem(problem.model, problem.variables, targets=problem.targets)
+    settings = solver.settings_of(1e-10, 1e-13, 2)
+    y_max = jnp.array([1.0, 1.0])  # scaled variables: (x + 3) / 6
+    y0, theta = jnp.array([0.35, 0.2]), jnp.asarray(solver.problem_arrays(problem, np)[4])
+    no_bounds = solver._Active(jnp.zeros(0, bool), jnp.zeros(2, bool), jnp.zeros(2, bool))
+    for p in (problem, feasibility):
+        weight = jnp.asarray(1.0 if p.objective is not None else 0.0)
+        y, lam, residual, (outputs, c), _ = solver._polish(p, y0, jnp.array([0.5]), theta, no_bounds, weight, settings, y_max)
+        if p.objective is not None:
+            kkt = solver._KKT(p, weight, no_bounds, jnp.array([True]), y_max)
+            r, (expected_outputs, expected_c) = kkt(jnp.concatenate([y, lam]), theta)
+        else:
+            v, expected_outputs = solver._values(p, y, theta)
+            r = expected_c = v[1:]
+        assert float(jnp.max(jnp.abs(r))) > 1e-9  # two steps from this start: not yet converged
+        np.testing.assert_allclose(residual, jnp.max(jnp.abs(r)), rtol=1e-12)
+        np.testing.assert_allclose(outputs, expected_outputs, rtol=1e-14)
+        np.testing.assert_allclose(c, expected_c, rtol=1e-12)
 
 
 def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
