@@ -41,11 +41,12 @@ def child(devices, points, fidelity):
     began = time.perf_counter()
     first = sweep(problem, over, progress=False)
     first_s = time.perf_counter() - began
+    print(f"first call of {points} points on {jax.devices()}: {first_s:.1f} s", file=sys.stderr, flush=True)
     began = time.perf_counter()
     warm = sweep(problem, over, progress=False)
     warm_s = time.perf_counter() - began
     print(json.dumps({
-        "points": int(warm.status.size), "first_s": first_s, "warm_s": warm_s,
+        "device": str(jax.devices()[0].device_kind), "points": int(warm.status.size), "first_s": first_s, "warm_s": warm_s,
         "successful": int(warm.successful.sum()), "agree": bool(np.array_equal(first.status, warm.status)),
         "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }))

@@ -7,6 +7,7 @@ derivatives of an optimum are checked against central differences of re-solves.
 import math
 from pathlib import Path
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -26,6 +27,36 @@ def test_published_optimum_from_the_published_start(published):
     x = [result.parameters[f"x{i + 1}"] for i in range(len(published.optimum))]
     np.testing.assert_allclose(x, published.optimum, rtol=TOL, atol=TOL)
     assert result.outputs["f"] == pytest.approx(published.value, rel=TOL, abs=TOL)
+
+
+@pytest.mark.parametrize("published", HOCK_SCHITTKOWSKI, ids=lambda p: p.name)
+def test_each_published_optimum_is_a_kkt_point(published):
+    """Checks the transcription, not the solver: at the published optimum every constraint
+    and bound holds, f is the published value, and f's gradient is a combination of the
+    active constraints' and bounds' gradients with the signs of a minimum (least squares)."""
+    x = np.asarray(published.optimum, np.float64)
+    lower, upper = np.array(published.bounds).T
+    g = np.array([float(gi(list(x))) for gi in published.g])
+    h = np.array([float(hi(list(x))) for hi in published.h])
+    assert np.all(g >= -1e-8) and np.all(np.abs(h) <= 1e-8) and np.all((x >= lower) & (x <= upper))
+    assert float(published.f(list(x))) == pytest.approx(published.value, rel=1e-8, abs=1e-8)
+    grad = lambda fn: np.asarray(jax.grad(lambda v: fn(list(v)))(jnp.asarray(x)))  # noqa: E731
+    n = x.size
+    # columns: active g (multiplier >= 0), every h (any sign), active bounds (>= 0, pointing inward)
+    active_g = [grad(gi) for gi, value in zip(published.g, g) if value <= 1e-8]
+    columns = active_g + [grad(hi) for hi in published.h]
+    columns += [np.eye(n)[i] for i in range(n) if x[i] <= lower[i] + 1e-12]
+    columns += [-np.eye(n)[i] for i in range(n) if x[i] >= upper[i] - 1e-12]
+    gradient = grad(published.f)
+    if columns:
+        A = np.stack(columns, axis=1)
+        multipliers = np.linalg.lstsq(A, gradient, rcond=None)[0]
+        residual = gradient - A @ multipliers
+        signed = np.delete(multipliers, np.s_[len(active_g):len(active_g) + len(published.h)])
+        assert np.all(signed >= -1e-6), multipliers
+    else:
+        residual = gradient
+    assert np.max(np.abs(residual)) <= 1e-6 * max(1.0, np.max(np.abs(gradient)))
 
 
 @pytest.mark.parametrize("gap", [1e-1, 1e-3, 3e-5, 1e-7, 1e-10, 0.0])
