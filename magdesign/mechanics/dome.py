@@ -98,6 +98,11 @@ def _check(outer_radius, thickness, material, fidelity, base, mesh):
     if len(mesh) != 2 or any(int(n) != n or n < 1 for n in mesh):
         raise ValueError(f"mesh must be two positive integers (wall, meridian), got {mesh!r}")
     check_positive(outer_radius=outer_radius, thickness=thickness, unit="m")
+    if fidelity == "axisymmetric":
+        for name, value in (("outer_radius", outer_radius), ("thickness", thickness)):
+            if jnp.ndim(value) != 0:
+                raise ValueError(f"{name} must be a scalar (m) at the axisymmetric level (one dome per call: "
+                                 f"jax.vmap for several), got shape {jnp.shape(value)}")
     Ro, t = _concrete(outer_radius), _concrete(thickness)
     if Ro is not None and t is not None and not np.all(t < Ro):
         raise ValueError(f"thickness must be smaller than outer_radius, got {thickness!r} >= {outer_radius!r}")
@@ -277,6 +282,10 @@ def dome_curve(
         concrete = _concrete(travels)
         if travels.ndim != 1 or (concrete is not None and not (np.all(concrete > 0) and np.all(np.diff(concrete) > 0))):
             raise ValueError(f"travels must be a 1-D array of increasing positive plate travels (m), got {travels!r}")
+        flat = _concrete(outer_radius - thickness)
+        if concrete is not None and flat is not None and concrete[-1] >= flat:
+            raise ValueError(f"travels must stay below outer_radius - thickness = {float(flat)!r} m (the wall "
+                             f"pressed flat), got {float(concrete[-1])!r} m")
     if fidelity == "reissner":
         return DomeCurve(travels, travels / reissner, jnp.zeros_like(travels), _successful(travels.shape))
     forces, radii, result = _axisymmetric_curve(

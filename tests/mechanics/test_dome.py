@@ -109,6 +109,7 @@ def test_reissner_grad_and_vmap():
         (dict(base="glued"), "base"),
         (dict(mesh=(0, 16)), "mesh"),
         (dict(fidelity="axisymmetric", material=LinearElastic(E=1e6, nu=0.3)), "material"),
+        (dict(fidelity="axisymmetric", thickness=np.array([1e-3, 2e-3])), r"thickness must be a scalar \(m\)"),
     ],
 )
 def test_bad_input_raises_naming_the_argument(kwargs, name):
@@ -127,6 +128,7 @@ def test_bad_input_raises_naming_the_argument(kwargs, name):
         (dict(travels=[2e-3, 1e-3]), "travels"),
         (dict(travels=[0.0, 1e-3]), "travels"),
         (dict(max_force=5.0, n_points=0), "n_points"),
+        (dict(travels=[1e-3, 7e-3]), r"travels must stay below outer_radius - thickness = 0.006 m"),
     ],
 )
 def test_bad_curve_input_raises_naming_the_argument(kwargs, name):
