@@ -99,6 +99,10 @@ DESIGN_ON_CONSTRAINT = 1e-9
 #   DESIGN_ESCAPES times.
 DESIGN_CURVATURE_TOL = 1e-7
 DESIGN_ESCAPES = 4
+# - a stationary point whose least curvature there is below this (relative, as above) is
+#   probed for a lower merit on both sides of that direction before it is accepted (a
+#   third- or fourth-order saddle such as x^3 at 0 has zero curvature);
+DESIGN_FLAT_CURVATURE = 1e-6
 # - the active constraints' null space: directions whose singular value is below this,
 #   relative to the largest, are free (the rows are O(1) gradients, so 1e-9 separates a
 #   dependent row from rounding by several decades either way);

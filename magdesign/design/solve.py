@@ -9,10 +9,16 @@ to its target or limit. It has two stages:
    minimised subject to the linearised targets and limits and the box, with elastic
    slacks so that the subproblem is always feasible (:mod:`magdesign.design._qp`); a
    backtracking line search on the exact l1 merit function f + nu |violation|_1 accepts
-   the step. Where the step vanishes the point is stationary; "successful" then also
-   needs the reduced Hessian of the Lagrangian on the null space of the active
+   the step. A whole step that the merit rejects is tried once more along an arc bent
+   by its second-order correction, which keeps the active constraints met to second
+   order (from the Hessians the search has already; it overcomes the Maratos effect on
+   curved constraints). Where the step vanishes the point is stationary; "successful"
+   then also needs the reduced Hessian of the Lagrangian on the null space of the active
    constraints to be positive semi-definite, and a point that fails it is left along its
-   direction of negative curvature (at most DESIGN_ESCAPES times, then "not_a_minimum").
+   direction of negative curvature, bent along the active constraints (at most
+   DESIGN_ESCAPES times, then "not_a_minimum"). A stationary point whose least curvature
+   is too small to tell (x^3 at 0), or which the steps reached only linearly, is probed
+   on both sides of that direction at a few lengths before it is accepted.
    This stage is ours because it chooses the active set, which no JAX library does:
    optimistix's solvers take no constraints or bounds, and jaxopt's bounded QP (BoxOSQP)
    is too inexact for it (measured in benchmarks/design.py).
@@ -60,6 +66,7 @@ from magdesign._numerics import (
     DESIGN_CURVATURE_TOL,
     DESIGN_ELASTIC,
     DESIGN_ESCAPES,
+    DESIGN_FLAT_CURVATURE,
     DESIGN_HESSIAN_FLOOR,
     DESIGN_NULL_SPACE_RTOL,
     DESIGN_ON_CONSTRAINT,
@@ -73,9 +80,14 @@ from magdesign.design._qp import solve_qp, where_needed
 from magdesign.design.problem import Problem, per_problem
 from magdesign.design.report import DesignResult, DesignStatus, DesignSweep
 
-# Armijo's sufficient-decrease fraction of the line search, and the shortest step it tries.
+# Armijo's sufficient-decrease fraction of the line search, and the shortest step it tries;
+# a decrease of the merit counts only above _ROUNDING times (1 + |merit|).
 _ARMIJO = 1e-4
 _SHORTEST_STEP = 1e-12
+_ROUNDING = 1e-13
+# Scaled constraint rows within this of their target or limit count as met in the merit
+# function: far below the tolerance on them (DESIGN_RTOL), above their rounding.
+_MET_ROW = 1e-13
 
 
 class Settings(eqx.Module):
@@ -203,8 +215,11 @@ def _lagrangian_hessian(jet, multipliers, weight):
 
 
 def _violation(c, n_targets):
-    """l1 violation: |target rows| + positive parts of the limit rows."""
-    return jnp.sum(jnp.abs(c[:n_targets])) + jnp.sum(jnp.maximum(c[n_targets:], 0.0))
+    """l1 violation: |target rows| + positive parts of the limit rows, each less
+    _MET_ROW: a row met to rounding counts as met, so that its rounding noise cannot
+    drown the objective's decrease in the merit function near a solution."""
+    targets, limits = jnp.abs(c[:n_targets]), c[n_targets:]
+    return jnp.sum(jnp.maximum(targets - _MET_ROW, 0.0)) + jnp.sum(jnp.maximum(limits - _MET_ROW, 0.0))
 
 
 def _merit(jet, weight, nu, n_targets):
@@ -295,24 +310,38 @@ def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective):
     ), jnp.concatenate([lower_multipliers, upper_multipliers])
 
 
+def _bend(jet, d, rows, fixed):
+    """(n,) the second-order correction of a step d: the least-norm w with
+    J_i w = -d^T H_i d / 2 on the constraint ``rows`` (m,) and w_j = 0 on the ``fixed``
+    variables (n,), so that the arc y + a d + a^2 w keeps those rows where their
+    linearisation puts them to second order in a (it follows a curved constraint)."""
+    n = d.shape[0]
+    matrix = jnp.concatenate([jnp.where(rows[:, None], jet.J[1:], 0.0), jnp.where(fixed[:, None], jnp.eye(n), 0.0)])
+    bent = jnp.where(rows, 0.5 * jnp.einsum("j,ijk,k->i", d, jet.H[1:], d), 0.0)
+    return -jnp.linalg.pinv(matrix, rtol=DESIGN_NULL_SPACE_RTOL) @ jnp.concatenate([bent, jnp.zeros(n)])
+
+
 def _least_curvature(jet, step: _Step, bound_multipliers, weight, n_targets):
-    """(e, v): the least eigenvalue e of the Hessian of the Lagrangian on the null space
-    of the strongly active constraints (targets, limits and bounds with a positive
-    multiplier), relative to the Hessian's largest eigenvalue modulus (plus 1), and its
-    eigenvector v (n,), scaled to a largest entry of 1."""
+    """(e, v, w): the least eigenvalue e of the Hessian of the Lagrangian on the null
+    space of the strongly active constraints (targets, limits and bounds with a positive
+    multiplier), relative to the Hessian's largest eigenvalue modulus (plus 1; about 2
+    where that null space is empty), its eigenvector v (n,), scaled to a largest entry of
+    1, and its second-order correction w (n,) on those constraints (:func:`_bend`)."""
     n = jet.J.shape[1]
     hessian = _lagrangian_hessian(jet, step.multipliers, weight)
     strong = step.multipliers > DESIGN_ACTIVE_MULTIPLIER
     strong = strong.at[:n_targets].set(True)
     lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
     rows = jnp.concatenate([jnp.where(strong[:, None], jet.J[1:], 0.0), jnp.where((lower | upper)[:, None], jnp.eye(n), 0.0)])
-    _, singular, vt = jnp.linalg.svd(rows, full_matrices=True)  # (n,) singular values: rows has m + n >= n
+    _, singular, vt = jnp.linalg.svd(rows, full_matrices=False)  # (n,) singular values: rows has m + n >= n
     null = singular <= DESIGN_NULL_SPACE_RTOL * jnp.max(singular, initial=0.0)
     basis = vt.T * null  # (n, n), columns outside the null space zeroed
-    eigenvalues, vectors = jnp.linalg.eigh(basis.T @ hessian @ basis)
     size = 1.0 + jnp.max(jnp.abs(jnp.linalg.eigvalsh(hessian)))
+    # the zeroed columns get curvature 2 size, so that only the null space's count
+    eigenvalues, vectors = jnp.linalg.eigh(basis.T @ hessian @ basis + jnp.diag(jnp.where(null, 0.0, 2.0 * size)))
     v = basis @ vectors[:, 0]
-    return eigenvalues[0] / size, v / jnp.maximum(jnp.max(jnp.abs(v)), TINY)
+    v = v / jnp.maximum(jnp.max(jnp.abs(v)), TINY)
+    return eigenvalues[0] / size, v, _bend(jet, v, strong, lower | upper)
 
 
 def _room(y, v, y_max):
@@ -323,15 +352,25 @@ def _room(y, v, y_max):
 
 # Phases of the search. Each iteration tries one point and evaluates the model's jet there
 # once; the loop stops at the first phase from CONVERGED on, each an end of the search.
-START, SEARCH, ESCAPE, CONVERGED, STALLED, NOT_MINIMUM, NONFINITE_START = range(7)
+START, SEARCH, ESCAPE, PROBE, CONVERGED, STALLED, NOT_MINIMUM, NONFINITE_START = range(8)
+
+# The probe of a flat stationary point tries the arc along its direction of least
+# curvature at these fractions of a box width, each on both sides, before accepting it.
+_PROBE_FIRST, _PROBE_SHRINK, _PROBE_LAST = 1.0, 1.0 / 8.0, 1.0 / 512.0
+# Steps that shrink by less than this factor from one point to the next converge linearly.
+_LINEAR_RATE = 0.1
 
 
 class _State(eqx.Module):
     """The search's state (scaled variables). ``y`` is the accepted point, ``jet`` the
-    model there, ``step`` the subproblem's answer at y, ``direction`` the line searched
-    (the step, or a direction of negative curvature), ``alpha`` the fraction of it tried
-    next; the line search asks for a merit below ``merit + ARMIJO (alpha slope + alpha^2
-    curvature)``. ``nu`` is the merit's penalty, ``weight`` the objective's scale."""
+    model there, ``step`` the subproblem's answer at y; the search tries the point
+    y + alpha direction, plus alpha^2 correction where ``bent``: ``direction`` is the
+    step, or a direction of negative or zero curvature, and ``correction`` its second-order
+    correction on the active constraints (:func:`_bend`; a step is bent only where its
+    whole length failed straight; ``straight`` is then the merit it reached); ``alpha``
+    the fraction tried next; the line search asks
+    for a merit below ``merit + ARMIJO (alpha slope + alpha^2 curvature)``. ``nu`` is the
+    merit's penalty, ``weight`` the objective's scale."""
 
     phase: Int[Array, ""]
     y: Float[Array, " n"]
@@ -339,11 +378,14 @@ class _State(eqx.Module):
     step: _Step
     bound_multipliers: Float[Array, " 2n"]
     direction: Float[Array, " n"]
+    correction: Float[Array, " n"]
     alpha: Float[Array, ""]
     merit: Float[Array, ""]
     slope: Float[Array, ""]
     curvature: Float[Array, ""]
     nu: Float[Array, ""]
+    bent: Bool[Array, ""]
+    straight: Float[Array, ""]
     weight: Float[Array, ""]
     escapes: Int[Array, ""]
     nudged: Bool[Array, ""]
@@ -366,22 +408,35 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         slope = jnp.dot(gradient, step.d) - nu * (_violation(jet.v[1:], n_targets) - step.linear_violation)
         slope = jnp.minimum(slope, 0.0)
         stationary = jnp.max(jnp.abs(step.d)) <= xtol
+        if problem.objective is None:  # no Hessians (see _jet): the steps go straight
+            bent = jnp.zeros(n)
+        else:
+            active_rows = jnp.concatenate([jnp.ones(n_targets, bool), step.active_limits])
+            bent = _bend(jet, step.d, active_rows, step.at_lower | step.at_upper)
         # Only a stationary point's curvature is read: its SVD and eigenvalues run only there.
-        curvature, v = where_needed(
+        curvature, v, w = where_needed(
             stationary & (problem.objective is not None),
             lambda operands: _least_curvature(*operands, n_targets),
             (jet, step, bound_multipliers, state.weight),
-            (jnp.zeros(()), jnp.zeros(n)),
+            (jnp.ones(()), jnp.zeros(n), jnp.zeros(n)),
         )
         # Leave a saddle downhill (or, where flat, towards the side with more room).
         v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
         v = jnp.where((jnp.dot(gradient, v) == 0.0) & (_room(y, -v, y_max) > _room(y, v, y_max)), -v, v)
-        saddle = stationary & (curvature < -DESIGN_CURVATURE_TOL) & (problem.objective is not None)
-        escape = saddle & (state.escapes < DESIGN_ESCAPES) & (_room(y, v, y_max) > 0.0)
-        phase = jnp.select([escape, saddle, stationary], [ESCAPE, NOT_MINIMUM, CONVERGED], SEARCH)
+        room = _room(y, v, y_max)
+        saddle = stationary & (curvature < -DESIGN_CURVATURE_TOL)
+        escape = saddle & (state.escapes < DESIGN_ESCAPES) & (room > 0.0)
+        # A stationary point whose curvature is too small to tell a minimum (x^3 at 0, a
+        # ridge of -x^4), or which the steps approached only linearly (as they approach a
+        # degenerate point, where at a minimum with curvature Newton's steps shrink
+        # quadratically), is probed on both sides before it is accepted.
+        linear = jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d))
+        flat = (curvature <= DESIGN_FLAT_CURVATURE) | linear
+        probe = stationary & ~saddle & flat & (state.escapes < DESIGN_ESCAPES)
+        phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)
         return eqx.tree_at(
-            lambda s: (s.phase, s.y, s.jet, s.step, s.bound_multipliers, s.direction, s.alpha, s.merit, s.slope,
-                       s.curvature, s.nu, s.escapes),
+            lambda s: (s.phase, s.y, s.jet, s.step, s.bound_multipliers, s.direction, s.correction, s.alpha, s.merit,
+                       s.slope, s.curvature, s.nu, s.bent, s.escapes),
             state,
             (
                 phase,
@@ -389,19 +444,23 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
                 jet,
                 step,
                 bound_multipliers,
-                jnp.where(escape, _room(y, v, y_max) * v, step.d),
-                jnp.asarray(1.0),
+                jnp.select([escape, probe], [room * v, v], step.d),
+                jnp.select([escape, probe], [room**2 * w, w], bent),
+                jnp.where(probe, _PROBE_FIRST, 1.0),
                 _merit(jet, state.weight, nu, n_targets),
                 jnp.where(escape, jnp.dot(gradient, v), slope),
                 jnp.where(escape, 0.5 * curvature, 0.0),
                 nu,
-                state.escapes + escape,
+                escape | probe,
+                state.escapes + (escape | probe),
             ),
         )
 
     def body(state):
         start = state.phase == START
-        trial = jnp.where(start, state.y, jnp.clip(state.y + state.alpha * state.direction, 0.0, y_max))
+        alpha = state.alpha
+        trial = state.y + alpha * state.direction + jnp.where(state.bent, alpha**2, 0.0) * state.correction
+        trial = jnp.where(start, state.y, jnp.clip(trial, 0.0, y_max))
         jet = _jet(problem, trial, theta)
         finite = jnp.all(jnp.isfinite(jet.v)) & jnp.all(jnp.isfinite(jet.J)) & jnp.all(jnp.isfinite(jet.H))
         state = eqx.tree_at(lambda s: s.steps, state, state.steps + 1)
@@ -417,14 +476,29 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         accepted = accept(_pick(start, scaled, state), trial, jet)
         not_started = eqx.tree_at(lambda s: s.phase, state, jnp.asarray(NONFINITE_START))
 
-        # SEARCH, ESCAPE: Armijo's test on the merit, else a shorter step.
-        alpha = state.alpha
+        # SEARCH, ESCAPE: Armijo's test on the merit, else a shorter step. PROBE: a merit
+        # lower by more than rounding, else the other side, then a shorter arc, and the
+        # point stands (CONVERGED) after the shortest.
+        probing = state.phase == PROBE
+        merit = _merit(jet, state.weight, state.nu, n_targets)
         wanted = state.merit + _ARMIJO * (alpha * state.slope + alpha**2 * state.curvature)
-        good = finite & (_merit(jet, state.weight, state.nu, n_targets) <= wanted)
-        shorter = eqx.tree_at(lambda s: s.alpha, state, 0.5 * alpha)
-        given_up = jnp.where(state.phase == ESCAPE, NOT_MINIMUM, STALLED)
+        wanted = jnp.where(probing, state.merit - _ROUNDING * (1.0 + jnp.abs(state.merit)), wanted)
+        good = finite & (merit <= wanted)
+        # A whole step that failed straight is tried once more bent (the Maratos effect: a
+        # step along a curved constraint that the merit rejects for its second-order
+        # violation); the shorter steps then stay bent where bending lowered the merit
+        # (``straight`` holds the straight step's), else they go straight.
+        bend = (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & jnp.any(state.correction != 0.0)
+        next_alpha = jnp.where(probing, jnp.where(alpha > 0.0, -alpha, -alpha * _PROBE_SHRINK), 0.5 * alpha)
+        next_alpha = jnp.where(bend, alpha, next_alpha)
+        keep = state.bent & ((alpha < 1.0) | (merit < state.straight))
+        bent = jnp.where(state.phase == SEARCH, bend | keep, state.bent)
+        straight = jnp.where(bend, merit, state.straight)
+        shorter = eqx.tree_at(lambda s: (s.alpha, s.bent, s.straight), state, (next_alpha, bent, straight))
+        given_up = jnp.select([state.phase == ESCAPE, probing], [NOT_MINIMUM, CONVERGED], STALLED)
         failed = eqx.tree_at(lambda s: s.phase, shorter, given_up)
-        searched = _pick(good, accepted, _pick(0.5 * alpha < _SHORTEST_STEP, failed, shorter))
+        too_short = jnp.abs(next_alpha) < jnp.where(probing, _PROBE_LAST, _SHORTEST_STEP)
+        searched = _pick(good, accepted, _pick(too_short, failed, shorter))
         return _pick(start, _pick(flat, nudged, _pick(finite, accepted, not_started)), searched)
 
     blank_jet = Jet(jnp.zeros(1 + m), jnp.zeros((1 + m, n)), jnp.zeros((1 + m, n, n)), jnp.zeros(len(problem.outputs)))
@@ -439,11 +513,14 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         ),
         bound_multipliers=jnp.zeros(2 * n),
         direction=jnp.zeros(n),
+        correction=jnp.zeros(n),
         alpha=jnp.asarray(1.0),
         merit=jnp.zeros(()),
         slope=jnp.zeros(()),
         curvature=jnp.zeros(()),
         nu=jnp.asarray(1.0),
+        bent=jnp.asarray(False),
+        straight=jnp.asarray(0.0),
         weight=jnp.asarray(1.0),
         escapes=jnp.asarray(0),
         nudged=jnp.asarray(False),

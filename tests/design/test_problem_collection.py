@@ -130,6 +130,74 @@ def test_a_saddle_is_left_uphill_for_a_maximum():
     assert set(result.active_bounds) == {"x"}
 
 
+def cube(v):
+    return {"f": v["x"] ** 3}
+
+
+@pytest.mark.parametrize("start", [0.5, 0.9, 1e-3, 0.0])
+def test_an_inflection_is_not_taken_for_a_minimum(start):
+    """minimise x^3 on [-1, 1]: x = 0 has zero slope and zero curvature but is no minimum
+    (f < 0 just left of it); the minimum is the bound x = -1. Newton's steps from x > 0
+    creep towards 0 (each halves x) and used to end there, "successful"."""
+    problem = Problem(cube, [Variable("x", -1.0, 1.0)], objective=Objective("f", "min"))
+    result = solve(problem, start={"x": start})
+    assert result.status == "successful"
+    assert result.parameters["x"] == -1.0
+    assert result.active_bounds == {"x": "lower"}
+
+
+def quartic_ridge(v):
+    return {"f": -v["x"] ** 4 + (v["y"] - 0.3) ** 2}
+
+
+def test_a_flat_maximum_is_left():
+    """minimise -x^4 + (y - 0.3)^2 on [-1, 1]^2 from (0, 0): along x the start is a maximum
+    with zero curvature (the Hessian there is diag(0, 2)); the minima are x = +-1, y = 0.3,
+    f = -1. The search used to stop at (0, 0.3), "successful"."""
+    problem = Problem(quartic_ridge, [Variable("x", -1.0, 1.0, start=0.0), Variable("y", -1.0, 1.0, start=0.0)],
+                      objective=Objective("f", "min"))
+    result = solve(problem)
+    assert result.status == "successful"
+    assert abs(result.parameters["x"]) == 1.0
+    assert result.parameters["y"] == pytest.approx(0.3, abs=1e-12)
+    assert result.outputs["f"] == pytest.approx(-1.0, abs=1e-12)
+
+
+def sum_on_circle(v):
+    return {"sum": v["x"] + v["y"], "radius2": v["x"] ** 2 + v["y"] ** 2}
+
+
+@pytest.mark.parametrize("sense", ["max", "min"])
+def test_a_constrained_saddle_is_left_along_a_curved_target(sense):
+    """maximise (minimise) x + y on the circle x^2 + y^2 = 2 from its constrained minimum
+    (maximum): at (-1, -1) ((1, 1)) every straight step along the tangent leaves the
+    circle, so that the merit rises whatever the objective gains; the escape follows the
+    circle to second order. Answer: (1, 1) ((-1, -1)), x + y = +-2."""
+    side = 1.0 if sense == "max" else -1.0
+    problem = Problem(sum_on_circle, [Variable("x", -3.0, 3.0), Variable("y", -3.0, 3.0)],
+                      targets=[Target("radius2", 2.0)], objective=Objective("sum", sense))
+    result = solve(problem, start={"x": -side, "y": -side})
+    assert result.status == "successful"
+    assert result.parameters["x"] == pytest.approx(side, abs=1e-9)
+    assert result.parameters["y"] == pytest.approx(side, abs=1e-9)
+    assert result.outputs["sum"] == pytest.approx(2.0 * side, abs=1e-12)
+
+
+def flat_valley(v):
+    return {"f": (v["x"] + v["y"] - 1.0) ** 2}
+
+
+def test_a_line_of_minima_is_accepted_after_its_probe():
+    """minimise (x + y - 1)^2 on [-2, 2]^2: every point of x + y = 1 is a minimum, with zero
+    curvature along the line; the probe along it finds no lower value and the point stands."""
+    problem = Problem(flat_valley, [Variable("x", -2.0, 2.0, start=0.0), Variable("y", -2.0, 2.0, start=0.0)],
+                      objective=Objective("f", "min"))
+    result = solve(problem)
+    assert result.status == "successful"
+    assert result.parameters["x"] + result.parameters["y"] == pytest.approx(1.0, abs=1e-12)
+    assert result.outputs["f"] == pytest.approx(0.0, abs=1e-20)
+
+
 def test_statuses_are_one_enumeration():
     assert STATUS_NAMES[0] == "successful"
     assert set(STATUS_NAMES) == set(DesignStatus._name_to_item)
