@@ -36,7 +36,8 @@ against ``jax.hessian``) at a tenth of the cost of differentiating the element e
 Solution. Newton's method on the total potential with the exact tangent, factored as a
 block tridiagonal matrix bordered by the plate travel (:mod:`._blocks`), a Levenberg
 shift only where the tangent is not positive definite, and a backtracking line search on
-the potential; converged when the largest out-of-balance force is below DOME_RESIDUAL_TOL
+the potential (skipped where the decrease it would test is below the potential's rounding,
+DOME_ENERGY_RESOLUTION); converged when the largest out-of-balance force is below DOME_RESIDUAL_TOL
 mu t^2. Two controls: the plate travel held (the natural control: it passes limit points
 where the force falls) or the force held (d an unknown, Pi - F d minimised). The path
 followers (:func:`follow_travels`, :func:`first_crossings`) step the plate travel
@@ -58,9 +59,10 @@ from jax import lax
 
 from magdesign._numerics import (
     CONTACT_SMOOTHING,
+    DOME_ENERGY_RESOLUTION,
     DOME_LEVENBERG_START,
-    DOME_LINE_SEARCH_SLACK,
     DOME_RESIDUAL_TOL,
+    DOME_ROUNDING_SLACK,
     smooth_ramp,
 )
 from magdesign.mechanics import _blocks
@@ -95,7 +97,7 @@ PATH_HARD_ITER = 16
 # SNAP_MAX_ITER iterations, to the equilibrium the dome snaps to at a travel this much
 # further. A failed jump ends the path.
 SNAP_STEP = 1e-2
-SNAP_MAX_ITER = 60
+SNAP_MAX_ITER = 200
 # Bisections of the interval of a path step that find where its Hermite interpolated
 # force meets a level (2^-50: the travel to rounding).
 HERMITE_BISECTIONS = 50
@@ -348,12 +350,16 @@ def _unit_last(mesh):
 
 
 def _factor(mesh, H):
-    """Cholesky factor (:class:`_blocks.Factor`) of H + lambda I with the smallest tried
+    """Cholesky factor (:class:`_blocks.Factor`) of H + lambda D with the smallest tried
     shift lambda >= 0 that makes it positive definite (lambda = 0 first, then
-    DOME_LEVENBERG_START times the largest diagonal entry, growing tenfold). One loop
+    DOME_LEVENBERG_START, growing tenfold), D = |diag H| (Marquardt's scaling, floored at
+    DOME_LEVENBERG_START times its largest entry): each unknown is shifted in proportion
+    to its own stiffness, so the contact's penalty, the stiffest, does not set the shift of
+    the soft bending modes (with lambda I it did, and a snap's jump crawled). One loop
     makes every try, so the program holds one factor (and a batch of matrices factors
     again only while one of them needs a shift)."""
-    scale = DOME_LEVENBERG_START * jnp.max(jnp.abs(jnp.diag(H)))
+    diagonal = jnp.abs(jnp.diag(H))
+    scale = DOME_LEVENBERG_START * jnp.maximum(diagonal, DOME_LEVENBERG_START * jnp.max(diagonal))
 
     def attempt(carry):
         _, k = carry
@@ -378,7 +384,8 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
     """Minimise Pi - force d over the unknowns (mask 1) from y0, the others held at
     ``held``: (state, converged, iterations, the Hessian of the potential at the state).
     Converged: the largest entry of the residual (an out-of-balance force, N) is at most
-    :func:`_tolerance`."""
+    :func:`_tolerance`, or at most DOME_ROUNDING_SLACK times it where a Newton step no
+    longer halves it (float64's floor, see magdesign._numerics)."""
     tol = _tolerance(params)
     y0 = mask * y0 + (1 - mask) * held
     unit = _unit_last(mesh)
@@ -392,28 +399,31 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         g = mask * (g - force * unit)
         return g, H, jnp.max(jnp.abs(g))
 
+    def on_floor(size, previous):
+        return (size > previous / 2) & (size <= DOME_ROUNDING_SLACK * tol)
+
     def cond(carry):
-        _, _, _, size, it, stalled = carry
-        return (it < max_iter) & (size > tol) & ~stalled
+        _, _, _, size, it, stopped = carry
+        return (it < max_iter) & (size > tol) & ~stopped
 
     def body(carry):
-        y, g, H, _, it, _ = carry
+        y, g, H, previous, it, _ = carry
         dy = _blocks.solve(mesh.layout, _factor(mesh, _restricted(H, mask)), g)
         pi0, slope = energy(y), jnp.dot(g, dy)
-        slack = DOME_LINE_SEARCH_SLACK * jnp.abs(pi0)
+        resolved = slope > DOME_ENERGY_RESOLUTION * jnp.abs(pi0)
 
         def search_cond(alpha):
             trial = energy(y - alpha * dy)
-            return (trial > pi0 - ARMIJO * alpha * slope + slack) & (alpha > 2.0**-LINE_SEARCH_MAX)
+            return resolved & (trial > pi0 - ARMIJO * alpha * slope) & (alpha > 2.0**-LINE_SEARCH_MAX)
 
         alpha = lax.while_loop(search_cond, lambda a: a / 2, 1.0)
         y = y - alpha * dy
         g, H, size = linearise(y)
-        return y, g, H, size, it + 1, alpha <= 2.0**-LINE_SEARCH_MAX
+        return y, g, H, size, it + 1, (alpha <= 2.0**-LINE_SEARCH_MAX) | on_floor(size, previous)
 
     g, H, size = linearise(y0)
-    y, _, H, size, iterations, _ = lax.while_loop(cond, body, (y0, g, H, size, 0, False))
-    return y, size <= tol, iterations, H
+    y, _, H, size, iterations, stopped = lax.while_loop(cond, body, (y0, g, H, size, 0, False))
+    return y, (size <= tol) | (stopped & (size <= DOME_ROUNDING_SLACK * tol)), iterations, H
 
 
 def _restricted(H, mask):
@@ -480,7 +490,8 @@ class Path(eqx.Module):
     """A point of a followed force-travel path: the state y (size,) at travel y[-1] (m),
     its plate force (N), its tangent dy/dd (size,) and stiffness dF/dd (N/m) along the
     path, the state before it (for the secant predictor), the next travel step (m), and
-    the count of steps tried. ``failed``: a snap's jump did not converge."""
+    the count of steps tried. ``cut``: the last step tried failed (and ``step`` was cut to a
+    quarter of it); ``failed``: a snap's jump did not converge."""
 
     y: jax.Array
     force: jax.Array
@@ -489,6 +500,7 @@ class Path(eqx.Module):
     previous: jax.Array
     step: jax.Array
     count: jax.Array
+    cut: jax.Array
     failed: jax.Array
 
     def can_go_on(self, max_travel):
@@ -510,7 +522,8 @@ def _start_path(mesh, params, step, tangents=True):
     zero = jnp.zeros(mesh.size)
     tangent, stiffness = _tangent(mesh, derivatives(mesh, zero, params)[1]) if tangents else (zero, jnp.zeros(()))
     return Path(
-        zero, jnp.zeros(()), tangent, stiffness, zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False)
+        zero, jnp.zeros(()), tangent, stiffness, zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False),
+        jnp.asarray(False),
     )
 
 
@@ -518,11 +531,12 @@ def _path_guess(path, goal, thickness):
     """(guess state, its travel, Newton iterations allowed, jump) of the next step towards
     the travel ``goal``: the secant prediction at min(d + step, goal). The first step, from
     the undeformed dome with the plate pressed in (no secant yet), may take a full solve's
-    iterations; a jump (see SNAP_STEP) starts from the last state."""
+    iterations; a jump (see SNAP_STEP: only after failed steps, so a short step asked for
+    at a light load is a plain step) starts from the last state."""
     y = path.y
     d = y[-1]
-    jump = path.step < SNAP_STEP * thickness
-    d_new = jnp.minimum(d + jnp.maximum(path.step, SNAP_STEP * thickness), goal)
+    jump = path.cut & (path.step < SNAP_STEP * thickness)
+    d_new = jnp.minimum(d + jnp.where(jump, SNAP_STEP * thickness, path.step), goal)
     last = d - path.previous[-1]
     ratio = jnp.where((last > 0) & ~jump, (d_new - d) / jnp.where(last > 0, last, 1.0), 0.0)
     guess = (y + ratio * (y - path.previous)).at[-1].set(d_new)
@@ -549,6 +563,7 @@ def _path_update(mesh, params, path, y_new, H_new, ok, iterations, jump):
         previous=jnp.where(ok, jnp.where(jump, y_new, path.y), path.previous),
         step=step,
         count=path.count + 1,
+        cut=~ok,
         failed=~ok & jump,
     )
 

@@ -81,12 +81,14 @@ def _banded_solve(inverse, below, r):
 
 
 def factor(layout: Layout, M, shift=0.0) -> Factor:
-    """Cholesky factor of M + ``shift`` I for the symmetric matrix M (n_dof + 1, n_dof + 1),
+    """Cholesky factor of M + diag(``shift``) for the symmetric matrix M (n_dof + 1, n_dof + 1),
     whose displacement part has the layout's block tridiagonal pattern (entries outside
-    it are ignored). Not positive definite: a factor that is not :meth:`Factor.finite`."""
+    it are ignored); ``shift`` a scalar or (n_dof + 1,). Not positive definite: a factor
+    that is not :meth:`Factor.finite`."""
     s, pad = layout.source, layout.pad
     eye = np.eye(layout.block)
-    blocks = M[s[:, :, None], s[:, None, :]] + shift * eye
+    shift = jnp.broadcast_to(shift, M.shape[:1])
+    blocks = M[s[:, :, None], s[:, None, :]] + shift[s][:, :, None] * eye
     diagonal = jnp.where(pad[:, :, None] | pad[:, None, :], eye * pad[:, :, None], blocks)
     below = jnp.where(pad[1:, :, None] | pad[:-1, None, :], 0.0, M[s[1:, :, None], s[:-1, None, :]])
 
@@ -104,7 +106,7 @@ def factor(layout: Layout, M, shift=0.0) -> Factor:
     inverse = jnp.concatenate([first[None], rest])
     w = jnp.where(pad, 0.0, M[s, -1])
     border = _banded_solve(inverse, below, w)
-    schur = M[-1, -1] + shift - jnp.sum(w * border)
+    schur = M[-1, -1] + shift[-1] - jnp.sum(w * border)
     return Factor(inverse, below, border, jnp.where(schur > 0, schur, jnp.nan))
 
 

@@ -257,6 +257,29 @@ def test_thin_walls_tend_to_reissners_thin_shell_limit():
     assert excess[-1] < 0.1
 
 
+@pytest.mark.parametrize("travel_fraction", [0.002, 0.05])
+def test_a_very_thin_wall_at_a_very_light_load_converges_near_reissner(travel_fraction):
+    """t / R = 0.005, a force whose Reissner travel is 0.002 t (a path step shorter than the
+    snap threshold; the potential's decrease below its rounding) or 0.05 t: converged, and
+    within 6 % of Reissner's thin-shell compliance (the thick-wall excess is ~8 t / R)."""
+    t = 0.005 * RO
+    reissner = reissner_compliance(RO, t, RESIN.youngs_modulus, RESIN.poisson_ratio)
+    force = travel_fraction * t / reissner
+    value, result = dome_compliance(outer_radius=RO, thickness=t, material=RESIN, max_force=force, throw=False)
+    assert result == DomeResult.successful
+    assert 1.0 < float(value) / reissner < 1.06
+
+
+def test_a_light_level_beside_a_heavy_one_is_solved_as_alone():
+    """A zero force (evaluated at the floor) in the same array as a force 400 times larger,
+    whose path passes a snap of the 0.2 mm wall."""
+    args = dict(outer_radius=8e-3, thickness=0.2e-3, material=RESIN, throw=False)
+    both, results = dome_compliance(max_force=np.array([0.02, 0.0]), **args)
+    alone, result = dome_compliance(max_force=0.0, **args)
+    assert result == DomeResult.successful and bool((results == DomeResult.successful)[1])
+    assert float(both[1]) == pytest.approx(float(alone), rel=1e-6)
+
+
 def test_penalty_contact_leaves_a_negligible_penetration():
     mesh = _axisymmetric.Mesh(*DEFAULT_MESH, "bonded")
 
@@ -301,21 +324,32 @@ def test_curve_derivatives_equal_central_differences_along_the_whole_path():
     np.testing.assert_allclose(jnp.diag(d_travel), fd_travel, rtol=1e-5)
 
 
-def test_thin_dome_beyond_its_snap_is_reported_never_a_plain_number():
-    """8 mm / 1 mm at 5 N: the plate presses the dome past where its apex inverts."""
-    args = dict(outer_radius=8e-3, thickness=1e-3, material=RESIN, max_force=5.0)
-    value, result = dome_compliance(**args, throw=False)
-    assert result != DomeResult.successful
-    assert result in (DomeResult.snapped, DomeResult.force_not_reached, DomeResult.not_converged)
+def test_thin_dome_is_followed_through_its_snap():
+    """8 mm / 1 mm: near 2.4 N, 3 mm of travel, the apex inverts and the force stalls while
+    the travel grows (with the force held it would snap through; the force dips again near
+    4.3 N); the path is followed past it, and 5 N is crossed beyond it, where the default mesh stays within 10 % of a
+    refined one (measured 7 %: the inverted wall's bend is narrow)."""
+    args = dict(outer_radius=8e-3, thickness=1e-3, material=RESIN)
+    curve = dome_curve(**args, travels=np.linspace(0.25, 5.0, 20) * 1e-3, throw=False)
+    assert bool(jnp.all(curve.result == DomeResult.successful))
+    slope = np.diff(curve.force) / np.diff(curve.travel)
+    stalls = np.nonzero(slope[1:] < 0.2 * slope[:-1])[0] + 1  # the force all but stops rising
+    assert len(stalls) > 0
+    snap = int(stalls[0])
+    assert 2.0 < float(curve.force[snap]) < 3.0
+    default = float(_axisymmetric_fns()[0](8e-3, 1e-3, SEED[2], SEED[3], 5.0))
+    refined = float(_axisymmetric_fns(mesh=(4, 32))[0](8e-3, 1e-3, SEED[2], SEED[3], 5.0))
+    assert 5.0 * refined > float(curve.travel[snap + 1])  # crossed beyond the snap
+    assert default == pytest.approx(refined, rel=0.10)
+
+
+def test_a_force_the_dome_cannot_carry_is_reported_never_a_plain_number():
+    """50 N on the 8 mm / 1 mm dome: the path runs out of steps near the wall pressed flat."""
+    args = dict(outer_radius=8e-3, thickness=1e-3, material=RESIN, max_force=50.0)
+    _, result = dome_compliance(**args, throw=False)
+    assert result in (DomeResult.force_not_reached, DomeResult.max_steps_reached)
     with pytest.raises(eqx.EquinoxRuntimeError, match="dome"):
         dome_compliance(**args)
-    curve = dome_curve(outer_radius=8e-3, thickness=1e-3, material=RESIN, travels=np.linspace(0.5, 4.0, 8) * 1e-3,
-                       throw=False)
-    ok = np.asarray(curve.result == DomeResult.successful)
-    assert ok[0] and not ok[-1]  # followed while it can be, flagged where it cannot
-    assert np.all(np.diff(curve.force[ok]) > 0)
-    with pytest.raises(eqx.EquinoxRuntimeError, match="dome"):
-        dome_curve(outer_radius=8e-3, thickness=1e-3, material=RESIN, travels=np.linspace(0.5, 4.0, 8) * 1e-3)
 
 
 def test_design_on_a_dome_that_did_not_converge_is_never_successful():
