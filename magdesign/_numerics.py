@@ -157,7 +157,9 @@ FD_JACOBIAN_STEP = 1e-2
 # A state is in equilibrium when its largest out-of-balance nodal force is below this
 # fraction of mu t^2 (the wall's own force scale, 2.4 N for seed 001's dome): Newton
 # converges quadratically there, so the state it leaves is exact to float64 rounding, and
-# the tolerance stays above the rounding of the contact forces (the penalty times ~1e-18 m).
+# the tolerance stays above the rounding of the contact forces (the penalty times ~1e-18 m)
+# and, for walls thicker than ~0.2 mm of seed 001's resin, of the wall's forces (see
+# DOME_ROUNDING_SLACK for thinner ones).
 DOME_RESIDUAL_TOL = 1e-10
 # Float64 rounding of the wall's nodal forces leaves a floor of about eps K R_o^2 theta^2
 # (K the bulk modulus, theta the wall's rotation: the volume change J - 1 is a small
@@ -182,7 +184,8 @@ DOME_MIN_TRAVEL_FRACTION = 1e-3
 DOME_ENERGY_RESOLUTION = 1e-9
 # First Levenberg shift (tried only when the tangent matrix is not positive definite,
 # e.g. while a load step passes through a buckling-like intermediate state), as a
-# fraction of its largest diagonal entry; it grows tenfold until a Cholesky succeeds.
+# fraction of each unknown's own diagonal entry (floored at this fraction of the largest);
+# it grows tenfold until a Cholesky succeeds.
 DOME_LEVENBERG_START = 1e-6
 
 # Step of the central-difference Jacobian of magdesign.inverse's calibration, in its

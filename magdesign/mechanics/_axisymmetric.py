@@ -38,7 +38,8 @@ block tridiagonal matrix bordered by the plate travel (:mod:`._blocks`), a Leven
 shift only where the tangent is not positive definite, and a backtracking line search on
 the potential (skipped where the decrease it would test is below the potential's rounding,
 DOME_ENERGY_RESOLUTION); converged when the largest out-of-balance force is below DOME_RESIDUAL_TOL
-mu t^2. Two controls: the plate travel held (the natural control: it passes limit points
+mu t^2 (or, where float64's rounding of the forces stops Newton short of that, below
+DOME_ROUNDING_SLACK times it). Two controls: the plate travel held (the natural control: it passes limit points
 where the force falls) or the force held (d an unknown, Pi - F d minimised). The path
 followers (:func:`follow_travels`, :func:`first_crossings`) step the plate travel
 adaptively from the undeformed dome with a secant predictor; a force level that a step
