@@ -48,6 +48,7 @@ import time
 from typing import NamedTuple
 
 import equinox as eqx
+import equinox._errors as _equinox_errors
 import jax
 import jax.numpy as jnp
 import lineax as lx
@@ -831,10 +832,37 @@ def _structure(problem, settings):
     return (host.key, settings_key), (host.leaves, settings_leaves)
 
 
+@contextlib.contextmanager
+def _errors_as_nan():
+    """While the core is traced and lowered, equinox's runtime errors become NaN: the
+    linear solves of optimistix's implicit adjoint (lineax raises on a non-finite
+    answer), a soft part's saturation solve. The core reports NaN as a status
+    ("nonfinite") or drops the derivatives, so it never raises; and a runtime error is a
+    host callback, which keeps a program out of JAX's persistent compilation cache, so
+    that the command compiled the solver afresh on every run. Two private names of
+    equinox (0.13): where they are missing, errors stay errors and the cache misses, which
+    tests/test_cli.py notices."""
+    names = ("EQX_ON_ERROR", "branched_error_if_impl_jit")
+    if not all(hasattr(_equinox_errors, name) for name in names):
+        yield
+        return
+    saved = [getattr(_equinox_errors, name) for name in names]
+    # the unjitted check reads EQX_ON_ERROR when traced; the jitted one would reuse a
+    # trace made outside this block
+    _equinox_errors.EQX_ON_ERROR = "nan"
+    _equinox_errors.branched_error_if_impl_jit = _equinox_errors.branched_error_if_impl
+    try:
+        yield
+    finally:
+        for name, value in zip(names, saved):
+            setattr(_equinox_errors, name, value)
+
+
 def _run(problem, y0, theta, settings):
     """The packed solution as a numpy array, from the cached compiled core."""
     key, arrays = _structure(problem, settings)
-    return np.asarray(_compiled(key, False)(arrays, y0, theta))
+    with _errors_as_nan():
+        return np.asarray(_compiled(key, False)(arrays, y0, theta))
 
 
 @functools.lru_cache(maxsize=16)
@@ -959,7 +987,8 @@ def _batch_program(key, arrays, size, n, p, sharding):
             if len(_PROGRAMS) >= 64:
                 _PROGRAMS.clear()
             shape = lambda columns: jax.ShapeDtypeStruct((size, columns), jnp.float64, sharding=sharding)  # noqa: E731
-            _PROGRAMS[entry] = _compiled(key, True).lower(arrays, shape(n), shape(p)).compile()
+            with _errors_as_nan():
+                _PROGRAMS[entry] = _compiled(key, True).lower(arrays, shape(n), shape(p)).compile()
         program = _PROGRAMS[entry]
         memory = program.memory_analysis()
         need = None if memory is None else memory.temp_size_in_bytes * devices
