@@ -703,7 +703,9 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     y = jnp.where(kept, jnp.clip(y, 0.0, y_max), y_start)
     outputs = jnp.where(kept, outputs, search.jet.outputs)
     c = jnp.where(kept, c, search.jet.v[1:])
-    derivatives = jnp.where(kept & jnp.isfinite(dy), scale[:, None] * dy, 0.0)
+    # Where the polish was not kept, or its implicit solve failed, there are no
+    # derivatives: NaN (null in JSON), never a plain 0 that reads as "insensitive".
+    derivatives = jnp.where(kept & jnp.isfinite(dy), scale[:, None] * dy, jnp.nan)
 
     # Stationarity is a gradient condition: met to sqrt(rtol), as the optimum's value is.
     kkt_met = kept & (residual <= jnp.sqrt(tol)) & (search.phase == CONVERGED)
@@ -837,7 +839,7 @@ def _errors_as_nan():
     """While the core is traced and lowered, equinox's runtime errors become NaN: the
     linear solves of optimistix's implicit adjoint (lineax raises on a non-finite
     answer), a soft part's saturation solve. The core reports NaN as a status
-    ("nonfinite") or drops the derivatives, so it never raises; and a runtime error is a
+    ("nonfinite") or as NaN derivatives, so it never raises; and a runtime error is a
     host callback, which keeps a program out of JAX's persistent compilation cache, so
     that the command compiled the solver afresh on every run. Two private names of
     equinox (0.13): where they are missing, errors stay errors and the cache misses, which
@@ -918,7 +920,8 @@ def solve(
         "not_a_minimum" or "max_steps_reached"), parameters, achieved
         targets and limits, active bounds and limits, steps, seconds, and the implicit
         derivatives of the parameters with respect to the target values and active limit
-        bounds.
+        bounds (NaN where they do not exist or could not be computed: an optimum that
+        the polish did not refine, or a model whose derivative there is infinite).
     """
     settings, host = settings_of(rtol, atol, max_steps), _host(problem)
     y0, theta = (host.y0 if not start else _start(problem, start, host.arrays)), host.theta

@@ -256,6 +256,17 @@ def test_derivatives_with_only_the_target_active():
     assert result.derivatives["r2"]["y"] == pytest.approx(-1.0 / math.sqrt(5.0 * radius2), rel=1e-9)
 
 
+def test_a_derivative_that_does_not_exist_is_not_reported_as_zero():
+    """y = x + sqrt(p) = 1 with p fixed at 0: x* = 1 - sqrt(p), whose derivative in p is
+    infinite there. The solve succeeds (x* = 1); the derivative must not read as 0."""
+    problem = Problem(lambda v: {"y": v["x"] + jnp.sqrt(v["p"])}, [Variable("x", 0.0, 2.0, start=0.5)],
+                      targets=[Target("y", 1.0)], fixed={"p": 0.0})
+    result = solve(problem)
+    assert result.status == "successful"
+    assert result.parameters["x"] == pytest.approx(1.0, rel=1e-12)
+    assert not np.isfinite(result.derivatives["p"]["x"])
+
+
 def test_feasibility_problem_with_a_curve_of_solutions():
     """Targets only, one equation in two unknowns: any point of the circle is a solution;
     the answer is on it, and its derivative is the minimum-norm one (along the normal)."""
