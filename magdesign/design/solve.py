@@ -6,13 +6,17 @@ to its target or limit. It has two stages:
 
 1. sequential quadratic programming (ours): at each accepted point the quadratic model
    (the Hessian of the Lagrangian, made definite by taking its eigenvalues' moduli) is
-   minimised subject to the linearised targets and limits and the box, with elastic
+   minimised subject to the linearised targets and limits, the box and a radius (an
+   inf-norm trust region: the length of step the search last accepted), with elastic
    slacks so that the subproblem is always feasible (:mod:`magdesign.design._qp`); a
    backtracking line search on the exact l1 merit function f + nu |violation|_1 accepts
-   the step. A whole step that the merit rejects is tried once more along an arc bent
-   by its second-order correction, which keeps the active constraints met to second
-   order (from the Hessians the search has already; it overcomes the Maratos effect on
-   curved constraints). Where the step vanishes the point is stationary; "successful"
+   the step, against the largest merit of the last few points (nonmonotone, so that a
+   curved constraint's higher-order violation does not stop the steps where the
+   objective is flat). A whole step that the merit rejects is tried once more along an
+   arc bent by its second-order correction, which keeps the active constraints met to
+   second order (from the Hessians the search has already; it overcomes the Maratos
+   effect on curved constraints), and after a step that needed it the next is bent from
+   its first try. Where the step vanishes the point is stationary; "successful"
    then also needs the reduced Hessian of the Lagrangian on the null space of the active
    constraints to be positive semi-definite, and a point that fails it is left along its
    direction of negative curvature, bent along the active constraints (at most
@@ -85,6 +89,13 @@ from magdesign.design.report import DesignResult, DesignStatus, DesignSweep
 # a decrease of the merit counts only above _ROUNDING times (1 + |merit|).
 _ARMIJO = 1e-4
 _SHORTEST_STEP = 1e-12
+# The step's radius (an inf-norm trust region on the subproblem, scaled variables): the
+# fraction of a step that the line search last accepted, doubled after each whole step
+# that reached it, never below _RADIUS_FLOOR times the step tolerance.
+_RADIUS_GROWTH, _RADIUS_FLOOR = 2.0, 10.0
+# The line search compares a step's merit with the largest of the last _HISTORY accepted
+# points' (nonmonotone, Grippo, Lampariello and Lucidi 1986).
+_HISTORY = 8
 _ROUNDING = 1e-13
 # Scaled constraint rows within this of their target or limit count as met in the merit
 # function: far below the tolerance on them (DESIGN_RTOL), above their rounding.
@@ -248,12 +259,13 @@ def _no_slack_rows(n, n_targets, n_limits):
     return jnp.arange(n_limits + 2 * n + 2 * n_targets + n_limits) >= n_limits + 2 * n
 
 
-def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective):
+def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius=jnp.inf):
     """The QP of one step at y, as (Q, q, A, b, G, h) for :func:`solve_qp`: minimise the
     quadratic model of the Lagrangian subject to the linearised rows and the box, each
     target row relaxed by two elastic slacks and each limit row by one, costing
-    DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits). Without an objective
-    the quadratic term is |d|^2 / 2 (the minimum-norm step of Gauss-Newton)."""
+    DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits), |d_i| <= radius.
+    Without an objective the quadratic term is |d|^2 / 2 (the minimum-norm step of
+    Gauss-Newton)."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     m = c.shape[0]
@@ -275,20 +287,21 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective):
             jnp.concatenate([jnp.zeros((n_slack, n)), -jnp.eye(n_slack)], axis=1),
         ]
     )
-    h = jnp.concatenate([-c[n_targets:], y_max - y, y, jnp.zeros(n_slack)])
+    h = jnp.concatenate([-c[n_targets:], jnp.minimum(y_max - y, radius), jnp.minimum(y, radius), jnp.zeros(n_slack)])
     return Q, q, A, -c[:n_targets], G, h
 
 
-def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective):
+def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective, radius):
     """The :func:`subproblem`'s solution at y, its QP's rows active at the ``last`` step
-    taken as a guess. With an objective the active set is the
-    rows and bounds with a positive multiplier; without one the multipliers say nothing,
-    and it is the rows and bounds that the step ends on. Returns the :class:`_Step` and
-    the bounds' multipliers (2n,): lower, then upper."""
+    taken as a guess. With an objective the active set is the rows and bounds with a
+    positive multiplier (a bound only where it, not the ``radius``, limits the step);
+    without one the multipliers say nothing, and it is the rows and bounds that the step
+    ends on. Returns the :class:`_Step` and the bounds' multipliers (2n,): lower, then
+    upper."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     n_limits = c.shape[0] - n_targets
-    qp = solve_qp(*subproblem(jet, y, y_max, last.multipliers, weight, n_targets, has_objective), guess=last.qp_rows)
+    qp = solve_qp(*subproblem(jet, y, y_max, last.multipliers, weight, n_targets, has_objective, radius), guess=last.qp_rows)
     # A subproblem that failed (non-finite) offers no step; the polish then judges the point.
     qp = jax.tree.map(lambda a: jnp.where(jnp.isfinite(a), a, 0.0) if a.dtype == jnp.float64 else a, qp)
     d = qp.w[:n]
@@ -297,6 +310,7 @@ def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective):
     if has_objective:
         active = (limit_multipliers, lower_multipliers, upper_multipliers)
         active_limits, at_lower, at_upper = (multiplier > DESIGN_ACTIVE_MULTIPLIER for multiplier in active)
+        at_lower, at_upper = at_lower & (y <= radius), at_upper & (y_max - y <= radius)
     else:
         active_limits = linearised[n_targets:] >= -DESIGN_ON_CONSTRAINT
         at_lower, at_upper = y + d <= DESIGN_ON_CONSTRAINT, y + d >= y_max - DESIGN_ON_CONSTRAINT
@@ -372,11 +386,14 @@ class _State(eqx.Module):
     model there, ``step`` the subproblem's answer at y; the search tries the point
     y + alpha direction, plus alpha^2 correction where ``bent``: ``direction`` is the
     step, or a direction of negative or zero curvature, and ``correction`` its second-order
-    correction on the active constraints (:func:`_bend`; a step is bent only where its
-    whole length failed straight; ``straight`` is then the merit it reached); ``alpha``
-    the fraction tried next; the line search asks
-    for a merit below ``merit + ARMIJO (alpha slope + alpha^2 curvature)``. ``nu`` is the
-    merit's penalty, ``weight`` the objective's scale."""
+    correction on the active constraints (:func:`_bend`; a step is bent where its whole
+    length failed straight, ``straight`` then being the merit it reached, or from its
+    first try where ``bend_first``, the last step having been bent); ``alpha`` the fraction
+    tried next; the line search asks for a merit below ``max(merit, history) + ARMIJO
+    (alpha slope + alpha^2 curvature)``, ``history`` holding the merits of the last
+    _HISTORY accepted points of the search. ``radius`` bounds the subproblem's step
+    (:data:`_RADIUS_GROWTH`). ``nu`` is the merit's penalty, ``weight`` the objective's
+    scale."""
 
     phase: Int[Array, ""]
     y: Float[Array, " n"]
@@ -396,6 +413,9 @@ class _State(eqx.Module):
     escapes: Int[Array, ""]
     nudged: Bool[Array, ""]
     steps: Int[Array, ""]
+    radius: Float[Array, ""]
+    history: Float[Array, " h"]
+    bend_first: Bool[Array, ""]
 
 
 def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
@@ -404,10 +424,21 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
     m = max(n_targets + len(problem.limit_rows), 1)  # with _evaluate's row that never binds
     xtol = jnp.sqrt(settings.atol)
 
+    def bend_operands(state):
+        """:func:`_bend`'s operands for the step at the accepted point: its active rows."""
+        rows = jnp.concatenate([jnp.ones(n_targets, bool), state.step.active_limits])
+        return state.jet, state.step.d, rows, state.step.at_lower | state.step.at_upper
+
     def accept(state, y, jet):
         """Take y as the new point: solve the subproblem there and choose what comes next."""
-        step, bound_multipliers = _step(jet, y, y_max, state.step, state.weight, n_targets, problem.objective is not None)
+        searched = state.phase == SEARCH
+        taken = jnp.max(jnp.abs(state.direction))
+        radius = jnp.where(searched & (state.alpha < 1.0), state.alpha * taken, state.radius)
+        reached = searched & (state.alpha == 1.0) & (taken >= 0.9 * state.radius)
+        radius = jnp.maximum(jnp.where(reached, _RADIUS_GROWTH * state.radius, radius), _RADIUS_FLOOR * xtol)
+        step, bound_multipliers = _step(jet, y, y_max, state.step, state.weight, n_targets, problem.objective is not None, radius)
         nu = jnp.maximum(state.nu, 2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0))
+        merit = _merit(jet, state.weight, nu, n_targets)
         gradient = state.weight * jet.J[0]
         # The merit's directional derivative along the step; never above 0, so that a
         # step which is no descent direction (an inexact subproblem) is taken only downhill.
@@ -437,7 +468,7 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)
         return eqx.tree_at(
             lambda s: (s.phase, s.y, s.jet, s.step, s.bound_multipliers, s.direction, s.correction, s.alpha, s.merit,
-                       s.slope, s.curvature, s.nu, s.bent, s.escapes),
+                       s.slope, s.curvature, s.nu, s.bent, s.escapes, s.radius, s.history, s.bend_first),
             state,
             (
                 phase,
@@ -448,18 +479,31 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
                 jnp.select([escape, probe], [room * v, v], step.d),
                 jnp.select([escape, probe], [room**2 * w, w], jnp.zeros(n)),
                 jnp.where(probe, _PROBE_FIRST, 1.0),
-                _merit(jet, state.weight, nu, n_targets),
+                merit,
                 jnp.where(escape, jnp.dot(gradient, v), slope),
                 jnp.where(escape, 0.5 * curvature, 0.0),
                 nu,
                 escape | probe,
                 state.escapes + (escape | probe),
+                radius,
+                # a new penalty makes the old merits incomparable; a search restarts its history
+                # after an escape or a probe
+                jnp.where((nu > state.nu) | ~searched, -jnp.inf, jnp.roll(state.history, 1)).at[0].set(merit),
+                searched & state.bent,
             ),
         )
 
     def body(state):
         start = state.phase == START
         alpha = state.alpha
+        # After a step that needed bending, the next is bent from its first try (curved
+        # constraints stay curved: trying it straight first costs an evaluation a step).
+        bend_now = (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & state.bend_first
+        correction = where_needed(bend_now, lambda operands: _bend(*operands), bend_operands(state), state.correction)
+        bent_now = eqx.tree_at(
+            lambda s: (s.bent, s.correction, s.straight), state, (jnp.any(correction != 0.0), correction, jnp.asarray(jnp.inf))
+        )
+        state = _pick(bend_now, bent_now, state)
         trial = state.y + alpha * state.direction + jnp.where(state.bent, alpha**2, 0.0) * state.correction
         trial = jnp.where(start, state.y, jnp.clip(trial, 0.0, y_max))
         jet = _jet(problem, trial, theta)
@@ -482,7 +526,8 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         # point stands (CONVERGED) after the shortest.
         probing = state.phase == PROBE
         merit = _merit(jet, state.weight, state.nu, n_targets)
-        wanted = state.merit + _ARMIJO * (alpha * state.slope + alpha**2 * state.curvature)
+        reference = jnp.where(state.phase == SEARCH, jnp.maximum(state.merit, jnp.max(state.history)), state.merit)
+        wanted = reference + _ARMIJO * (alpha * state.slope + alpha**2 * state.curvature)
         wanted = jnp.where(probing, state.merit - _ROUNDING * (1.0 + jnp.abs(state.merit)), wanted)
         good = finite & (merit <= wanted)
         # A whole step that failed straight is tried once more bent (the Maratos effect: a
@@ -493,13 +538,7 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         # accepted point its pseudo-inverse would cost a batched sweep 1.7 times its time.
         # Without an objective there are no Hessians (see _jet), and the steps go straight.
         may_bend = (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & ~good & (problem.objective is not None)
-        active_rows = jnp.concatenate([jnp.ones(n_targets, bool), state.step.active_limits])
-        correction = where_needed(
-            may_bend,
-            lambda operands: _bend(*operands),
-            (state.jet, state.step.d, active_rows, state.step.at_lower | state.step.at_upper),
-            state.correction,
-        )
+        correction = where_needed(may_bend, lambda operands: _bend(*operands), bend_operands(state), state.correction)
         bend = may_bend & jnp.any(correction != 0.0)
         next_alpha = jnp.where(probing, jnp.where(alpha > 0.0, -alpha, -alpha * _PROBE_SHRINK), 0.5 * alpha)
         next_alpha = jnp.where(bend, alpha, next_alpha)
@@ -539,6 +578,9 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         escapes=jnp.asarray(0),
         nudged=jnp.asarray(False),
         steps=jnp.asarray(0),
+        radius=jnp.asarray(jnp.inf),
+        history=jnp.full(_HISTORY, -jnp.inf),
+        bend_first=jnp.asarray(False),
     )
     return jax.lax.while_loop(lambda s: (s.phase < CONVERGED) & (s.steps < settings.max_steps), body, state)
 
