@@ -7,12 +7,13 @@ to its target or limit. It has two stages:
 1. sequential quadratic programming (ours): at each accepted point the quadratic model
    (the Hessian of the Lagrangian, made definite by taking its eigenvalues' moduli) is
    minimised subject to the linearised targets and limits, the box and a radius (an
-   inf-norm trust region: the length of step the search last accepted), with elastic
-   slacks so that the subproblem is always feasible (:mod:`magdesign.design._qp`); a
-   backtracking line search on the exact l1 merit function f + nu |violation|_1 accepts
-   the step, against the largest merit of the last few points (nonmonotone, so that a
-   curved constraint's higher-order violation does not stop the steps where the
-   objective is flat). A whole step that the merit rejects is tried once more along an
+   inf-norm trust region: none until the line search first shortens a step, then the
+   length it shortened the last one to, doubled after each whole step that reaches
+   it), with elastic slacks so that the subproblem is always feasible
+   (:mod:`magdesign.design._qp`); a backtracking line search on the exact l1 merit
+   function f + nu |violation|_1 accepts the step, along a descent direction against the
+   largest merit of the last few points (nonmonotone, so that a curved constraint's
+   higher-order violation does not stop the steps where the objective is flat). A whole step that the merit rejects is tried once more along an
    arc bent by its second-order correction, which keeps the active constraints met to
    second order (from the Hessians the search has already; it overcomes the Maratos
    effect on curved constraints), and after a step that needed it the next is bent from
@@ -499,11 +500,13 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         # After a step that needed bending, the next is bent from its first try (curved
         # constraints stay curved: trying it straight first costs an evaluation a step).
         bend_now = (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & state.bend_first
-        correction = where_needed(bend_now, lambda operands: _bend(*operands), bend_operands(state), state.correction)
-        bent_now = eqx.tree_at(
-            lambda s: (s.bent, s.correction, s.straight), state, (jnp.any(correction != 0.0), correction, jnp.asarray(jnp.inf))
-        )
-        state = _pick(bend_now, bent_now, state)
+        if problem.objective is not None:
+            correction = where_needed(bend_now, lambda operands: _bend(*operands), bend_operands(state), state.correction)
+            state = eqx.tree_at(
+                lambda s: (s.bent, s.correction, s.straight),
+                state,
+                (state.bent | (bend_now & jnp.any(correction != 0.0)), correction, jnp.where(bend_now, jnp.inf, state.straight)),
+            )
         trial = state.y + alpha * state.direction + jnp.where(state.bent, alpha**2, 0.0) * state.correction
         trial = jnp.where(start, state.y, jnp.clip(trial, 0.0, y_max))
         jet = _jet(problem, trial, theta)
@@ -526,14 +529,17 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         # point stands (CONVERGED) after the shortest.
         probing = state.phase == PROBE
         merit = _merit(jet, state.weight, state.nu, n_targets)
-        reference = jnp.where(state.phase == SEARCH, jnp.maximum(state.merit, jnp.max(state.history)), state.merit)
+        # nonmonotone only in the search and along a descent direction (the history's
+        # first entry is this point's merit)
+        reference = jnp.where((state.phase == SEARCH) & (state.slope < 0.0), jnp.max(state.history), state.merit)
         wanted = reference + _ARMIJO * (alpha * state.slope + alpha**2 * state.curvature)
         wanted = jnp.where(probing, state.merit - _ROUNDING * (1.0 + jnp.abs(state.merit)), wanted)
         good = finite & (merit <= wanted)
         # A whole step that failed straight is tried once more bent (the Maratos effect: a
         # step along a curved constraint that the merit rejects for its second-order
         # violation); the shorter steps then stay bent where bending lowered the merit
-        # (``straight`` holds the straight step's), else they go straight.
+        # (``straight`` holds the straight step's), else they go straight. A step bent from
+        # its first try (``bend_first``) stays bent.
         # The correction is worked out only here, where a whole step failed: at every
         # accepted point its pseudo-inverse would cost a batched sweep 1.7 times its time.
         # Without an objective there are no Hessians (see _jet), and the steps go straight.
