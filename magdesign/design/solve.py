@@ -13,11 +13,12 @@ to its target or limit. It has two stages:
    (:mod:`magdesign.design._qp`); a backtracking line search on the exact l1 merit
    function f + nu |violation|_1 accepts the step, along a descent direction against the
    largest merit of the last few points (nonmonotone, so that a curved constraint's
-   higher-order violation does not stop the steps where the objective is flat). A whole step that the merit rejects is tried once more along an
-   arc bent by its second-order correction, which keeps the active constraints met to
-   second order (from the Hessians the search has already; it overcomes the Maratos
-   effect on curved constraints), and after a step that needed it the next is bent from
-   its first try. Where the step vanishes the point is stationary; "successful"
+   higher-order violation does not stop the steps where the objective is flat). A whole
+   step that the merit rejects is tried once more along an arc bent by its second-order
+   correction, which keeps the active constraints met to second order (from the
+   Hessians the search has already; it overcomes the Maratos effect on curved
+   constraints), and after a step that needed it the next is bent from its first try.
+   Where the step vanishes the point is stationary; "successful"
    then also needs the reduced Hessian of the Lagrangian on the null space of the active
    constraints to be positive semi-definite, and a point that fails it is left along its
    direction of negative curvature, bent along the active constraints (at most
@@ -90,9 +91,10 @@ from magdesign.design.report import DesignResult, DesignStatus, DesignSweep
 # a decrease of the merit counts only above _ROUNDING times (1 + |merit|).
 _ARMIJO = 1e-4
 _SHORTEST_STEP = 1e-12
-# The step's radius (an inf-norm trust region on the subproblem, scaled variables): the
-# fraction of a step that the line search last accepted, doubled after each whole step
-# that reached it, never below _RADIUS_FLOOR times the step tolerance.
+# The step's radius (an inf-norm trust region on the subproblem, scaled variables): none
+# until the line search first shortens a step, then the length it shortened the last one
+# to, doubled after each whole step that reaches it, never below _RADIUS_FLOOR times the
+# step tolerance.
 _RADIUS_GROWTH, _RADIUS_FLOOR = 2.0, 10.0
 # The line search compares a step's merit with the largest of the last _HISTORY accepted
 # points' (nonmonotone, Grippo, Lampariello and Lucidi 1986).
@@ -390,9 +392,10 @@ class _State(eqx.Module):
     correction on the active constraints (:func:`_bend`; a step is bent where its whole
     length failed straight, ``straight`` then being the merit it reached, or from its
     first try where ``bend_first``, the last step having been bent); ``alpha`` the fraction
-    tried next; the line search asks for a merit below ``max(merit, history) + ARMIJO
+    tried next; the line search asks for a merit below ``max(history) + ARMIJO
     (alpha slope + alpha^2 curvature)``, ``history`` holding the merits of the last
-    _HISTORY accepted points of the search. ``radius`` bounds the subproblem's step
+    _HISTORY accepted points of the search (the first this one's; along a direction
+    that is no descent, ``merit`` alone). ``radius`` bounds the subproblem's step
     (:data:`_RADIUS_GROWTH`). ``nu`` is the merit's penalty, ``weight`` the objective's
     scale."""
 
