@@ -34,9 +34,11 @@ to its target or limit. It has two stages:
    without objective is a feasibility problem, whose equations (targets, active limits,
    fixed variables; in general fewer than the unknowns) go to ``optimistix.root_find``
    too, where Newton through an SVD is Gauss-Newton with minimum-norm steps (see
-   :func:`_polish` for why not ``optimistix.least_squares``). Both use lineax's SVD,
-   which gives the minimum-norm step where the Jacobian is rank-deficient (degenerate
-   active sets, manifolds of solutions), and ``optimistix.ImplicitAdjoint``, whose
+   :func:`_polish` for why not ``optimistix.least_squares``). Both solve their linear
+   systems by LU where that is safe and by lineax's SVD where not
+   (:mod:`magdesign.design._linear`): the SVD gives the minimum-norm step where the
+   Jacobian is rank-deficient (degenerate active sets, manifolds of solutions). Both use
+   ``optimistix.ImplicitAdjoint``, whose
    derivatives (forward mode, with respect to the target values and limit bounds) are
    the optimum's implicit derivatives.
 
@@ -57,7 +59,6 @@ import equinox as eqx
 import equinox._errors as _equinox_errors
 import jax
 import jax.numpy as jnp
-import lineax as lx
 import numpy as np
 import optimistix as optx
 from jax.experimental import multihost_utils
@@ -83,6 +84,7 @@ from magdesign._numerics import (
     TINY,
     safe_div,
 )
+from magdesign.design._linear import LUOrSVD
 from magdesign.design._qp import solve_qp, where_needed
 from magdesign.design.problem import Problem, per_problem
 from magdesign.design.report import DesignResult, DesignStatus, DesignSweep
@@ -686,8 +688,8 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
     = (outputs, c) at the polished point; differentiable in theta (implicit)."""
     n, n_targets = y.shape[0], len(problem.targets)
     equations = jnp.concatenate([jnp.ones(n_targets, bool), active.limits])
-    solver_options = dict(rtol=settings.rtol * 1e-3, atol=settings.rtol * 1e-3, linear_solver=lx.SVD())
-    adjoint = optx.ImplicitAdjoint(linear_solver=lx.SVD())
+    solver_options = dict(rtol=settings.rtol * 1e-3, atol=settings.rtol * 1e-3, linear_solver=LUOrSVD())
+    adjoint = optx.ImplicitAdjoint(linear_solver=LUOrSVD())
 
     if problem.objective is None:
 
@@ -697,9 +699,9 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
             r = jnp.concatenate([jnp.where(equations, c, 0.0), active.fixed_residual(y, y_max)])
             return r, (outputs, c)
 
-        # A root find with Newton steps through lineax's SVD: on these equations (more
-        # unknowns than equations, in general) that is Gauss-Newton with minimum-norm
-        # steps, and its implicit derivatives (-J^+ dr/dtheta) need first derivatives of
+        # A root find with Newton steps through an SVD (LUOrSVD: these equations are not
+        # square, in general): with more unknowns than equations that is Gauss-Newton
+        # with minimum-norm steps, and its implicit derivatives (-J^+ dr/dtheta) need first derivatives of
         # the model only. optimistix.least_squares would differentiate grad |r|^2 / 2,
         # which traces second derivatives: on the spin-valve example that took the
         # compile of a batched solve from under 1 GB to over 11 GB.

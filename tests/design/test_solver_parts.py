@@ -1,15 +1,18 @@
 """Parts of the design solver checked on their own: the one-trip loop that runs work only
 where a vmapped lane needs it, the polish's custom derivative of its KKT residual (against
-plain forward-mode differentiation of the same residual), and the QP's active-set rounds on
-a subproblem that once sent a whole batch to the interior-point method."""
+plain forward-mode differentiation of the same residual), the QP's active-set rounds on
+a subproblem that once sent a whole batch to the interior-point method, and the polish's
+linear solver (LU, else SVD) against numpy."""
 
 import importlib
 
 import jax
 import jax.numpy as jnp
+import lineax as lx
 import numpy as np
 
 from magdesign.design import Limit, Objective, Problem, Target, Variable
+from magdesign.design._linear import LUOrSVD
 from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.design.sweep import with_fixed
 from magdesign.units import mm
@@ -117,3 +120,43 @@ def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
     assert bool(guessed.converged) and int(guessed.iterations) == 0
     assert int(reference.iterations) > 0
     np.testing.assert_allclose(guessed.w, reference.w, rtol=0, atol=1e-9)
+
+
+def _solve_with(solver, matrix, vector):
+    return np.asarray(lx.linear_solve(lx.MatrixLinearOperator(jnp.asarray(matrix)), jnp.asarray(vector), solver).value)
+
+
+def test_polish_linear_solver_agrees_with_numpy_on_regular_singular_and_nonsquare_systems():
+    """LU where the matrix is regular; where it is singular (a degenerate active set) or not
+    square, the minimum-norm least-squares answer (numpy's lstsq), never LU's NaN or an
+    arbitrary member of the solutions; each also batched, one member singular."""
+    rng = np.random.default_rng(3)
+    regular = rng.normal(size=(5, 5)) + 5 * np.eye(5)
+    # rank 3: two rows repeat others, the right side consistent with them
+    singular = rng.normal(size=(5, 5))
+    singular[3], singular[4] = singular[0], singular[1] + singular[2]
+    wide = rng.normal(size=(3, 5))
+    vector = rng.normal(size=5)
+    consistent = singular @ rng.normal(size=5)
+    for matrix, b in ((regular, vector), (singular, consistent), (singular, vector), (wide, vector[:3]), (wide.T, vector)):
+        expected = np.linalg.lstsq(matrix, b, rcond=None)[0]
+        np.testing.assert_allclose(_solve_with(LUOrSVD(), matrix, b), expected, rtol=1e-9, atol=1e-12)
+    batched = jax.vmap(lambda m, b: lx.linear_solve(lx.MatrixLinearOperator(m), b, LUOrSVD()).value)(
+        jnp.stack([regular, singular]), jnp.stack([vector, consistent])
+    )
+    np.testing.assert_allclose(batched[0], np.linalg.solve(regular, vector), rtol=1e-10)
+    np.testing.assert_allclose(batched[1], np.linalg.lstsq(singular, consistent, rcond=None)[0], rtol=1e-9, atol=1e-12)
+
+
+def test_polish_linear_solver_transposes_for_reverse_mode():
+    """Reverse mode solves with the transposed matrix (the solver's ``transpose``): the
+    gradient of sum(A^-1 b) in b is A^-T 1, for a regular and a singular A (pseudo-inverse)."""
+    rng = np.random.default_rng(4)
+    regular = rng.normal(size=(4, 4)) + 4 * np.eye(4)
+    singular = regular.copy()
+    singular[3] = singular[0] - singular[1]
+    for matrix in (regular, singular):
+        gradient = jax.grad(lambda b: jnp.sum(lx.linear_solve(lx.MatrixLinearOperator(jnp.asarray(matrix)), b, LUOrSVD()).value))(
+            jnp.ones(4)
+        )
+        np.testing.assert_allclose(gradient, np.linalg.pinv(matrix).T @ np.ones(4), rtol=1e-9, atol=1e-12)
