@@ -2,12 +2,12 @@
 
 lineax's SVD gives the minimum-norm solution where a Jacobian is rank-deficient (a
 degenerate active set), which the polish needs; but a batched SVD of a tiny matrix costs
-10-25 times its LU (LAPACK's gesdd against getrf: 26 against 1.1 ms for 3334 4 x 4
-matrices on the 2-core development machine), and on the default design's batched sweep the
-polish's SVDs took a quarter of the time. Almost every KKT Jacobian is square and well
-conditioned, so this solver factors it by LU and runs the SVD only where the LU's pivots
-say the matrix is near singular (:data:`_PIVOT_RTOL`), or the answer is not finite; under
-vmap the SVD then runs only if some member needs it (:func:`where_needed`).
+about 24 times its LU (LAPACK's gesdd against getrf: 26 against 1.1 ms for 3334 4 x 4
+matrices on the 2-core development machine). Almost every KKT Jacobian of the polish is
+square and well conditioned, so this solver factors a square matrix by LU and computes its
+SVD only where the LU's condition estimate is above :data:`_CONDITION_LIMIT`; under vmap
+the SVD then runs only if some member needs it (:func:`where_needed`). A matrix that is
+not square always goes to the SVD.
 """
 
 from typing import Any
@@ -20,44 +20,50 @@ from lineax.internal import pack_structures, ravel_vector, transpose_packed_stru
 
 from magdesign.design._qp import where_needed
 
-# An LU whose smallest pivot is below this fraction of its largest goes to the SVD. Far
-# above the SVD's own cut-off (2 eps n), so that every matrix the SVD would treat as rank-
-# deficient goes there; below it the two agree to the matrix's condition times eps.
-_PIVOT_RTOL = 1e-8
+# A square matrix whose 1-norm condition number (from its LU) is above this goes to the
+# SVD. The 2-norm condition is then below n times this, far below the 1 / (2 n eps) at
+# which lineax's SVD treats a matrix as rank-deficient, so where the LU is taken the SVD
+# would have inverted every singular value too, and the two answers agree to the
+# condition times eps.
+_CONDITION_LIMIT = 1e8
 
 
 class LUOrSVD(lx.AbstractLinearSolver):
-    """LU for square, well-conditioned operators; lineax's SVD (minimum norm, as
-    ``scipy.linalg.lstsq``) for the others."""
+    """LU for square, well-conditioned operators; the minimum-norm least-squares solution
+    (as lineax's SVD, or ``scipy.linalg.lstsq``) for the others. Real matrices only."""
 
     def init(self, operator, options: dict[str, Any]):
         del options
         matrix = operator.as_matrix()
+        if jnp.iscomplexobj(matrix):
+            raise TypeError("LUOrSVD solves real systems only")
         n_out, n_in = matrix.shape
         if n_out == n_in and n_in > 0:
             lu, pivots = jsp.linalg.lu_factor(matrix)
-            diagonal = jnp.abs(jnp.diagonal(lu))
-            well = jnp.all(jnp.isfinite(lu)) & (jnp.min(diagonal) > _PIVOT_RTOL * jnp.max(diagonal))
+            inverse = jsp.linalg.lu_solve((lu, pivots), jnp.eye(n_in, dtype=matrix.dtype))
+            condition = jnp.max(jnp.sum(jnp.abs(matrix), axis=0)) * jnp.max(jnp.sum(jnp.abs(inverse), axis=0))
+            well = condition <= _CONDITION_LIMIT  # False where the LU is not finite (NaN)
+            svd = where_needed(~well, _svd, matrix, _svd_shaped_zeros(matrix))
+            factors = (lu, pivots, well, svd)
         else:
-            lu, pivots, well = matrix, jnp.zeros(0, jnp.int32), jnp.asarray(False)
-        return (matrix, lu, pivots, well), pack_structures(operator), eqxi.Static(False)
+            factors = (None, None, None, _svd(matrix) if matrix.size else _svd_shaped_zeros(matrix))
+        return factors, pack_structures(operator), eqxi.Static(False)
 
     def compute(self, state, vector, options: dict[str, Any]):
         del options
-        (matrix, lu, pivots, well), packed_structures, transposed = state
+        (lu, pivots, well, (u, s, vt)), packed_structures, transposed = state
         vector = ravel_vector(vector, packed_structures)
         if transposed.value:
-            matrix = matrix.T
-        if matrix.shape[0] == matrix.shape[1] and matrix.shape[0] > 0:
-            by_lu = jsp.linalg.lu_solve((lu, pivots), vector, trans=1 if transposed.value else 0)
+            u, vt = vt.T, u.T
+        if s.size == 0:
+            solution = jnp.zeros(vt.shape[1], vector.dtype)
         else:
-            by_lu = jnp.zeros(matrix.shape[1], vector.dtype)
-        solution = where_needed(
-            ~(well & jnp.all(jnp.isfinite(by_lu))),
-            lambda operands: _minimum_norm(*operands),
-            (matrix, vector),
-            by_lu,
-        )
+            # lineax's SVD's cut-off (lineax._misc.resolve_rcond)
+            kept = s > 2 * jnp.finfo(s.dtype).eps * max(u.shape[0], vt.shape[1]) * s[0]
+            inverted = jnp.where(kept, 1.0 / jnp.where(kept, s, 1.0), 0.0)
+            solution = vt.T @ (inverted * (u.T @ vector))
+        if lu is not None:
+            solution = jnp.where(well, jsp.linalg.lu_solve((lu, pivots), vector, trans=1 if transposed.value else 0), solution)
         return unravel_solution(solution, packed_structures), lx.RESULTS.successful, {}
 
     def transpose(self, state, options: dict[str, Any]):
@@ -67,12 +73,18 @@ class LUOrSVD(lx.AbstractLinearSolver):
 
     def conj(self, state, options: dict[str, Any]):
         del options
-        return state, {}  # real matrices only (the design solver's are float64)
+        return state, {}  # real matrices only (init rejects complex ones)
 
     def assume_full_rank(self):
         return False
 
 
-def _minimum_norm(matrix, vector):
-    """The minimum-norm least-squares solution, by lineax's SVD."""
-    return lx.linear_solve(lx.MatrixLinearOperator(matrix), vector, lx.SVD()).value
+def _svd(matrix):
+    """(u, s, vt), the thin SVD."""
+    return jsp.linalg.svd(matrix, full_matrices=False)
+
+
+def _svd_shaped_zeros(matrix):
+    k = min(matrix.shape)
+    zeros = lambda *shape: jnp.zeros(shape, matrix.dtype)  # noqa: E731
+    return zeros(matrix.shape[0], k), zeros(k), zeros(k, matrix.shape[1])

@@ -34,10 +34,10 @@ to its target or limit. It has two stages:
    without objective is a feasibility problem, whose equations (targets, active limits,
    fixed variables; in general fewer than the unknowns) go to ``optimistix.root_find``
    too, where Newton through an SVD is Gauss-Newton with minimum-norm steps (see
-   :func:`_polish` for why not ``optimistix.least_squares``). Both solve their linear
-   systems by LU where that is safe and by lineax's SVD where not
-   (:mod:`magdesign.design._linear`): the SVD gives the minimum-norm step where the
-   Jacobian is rank-deficient (degenerate active sets, manifolds of solutions). Both use
+   :func:`_polish` for why not ``optimistix.least_squares``). Their linear systems go
+   to :mod:`magdesign.design._linear`: LU where the Jacobian is square and well
+   conditioned, else an SVD, whose minimum-norm step handles rank-deficient Jacobians
+   (degenerate active sets, manifolds of solutions). Both use
    ``optimistix.ImplicitAdjoint``, whose
    derivatives (forward mode, with respect to the target values and limit bounds) are
    the optimum's implicit derivatives.
@@ -699,9 +699,9 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
             r = jnp.concatenate([jnp.where(equations, c, 0.0), active.fixed_residual(y, y_max)])
             return r, (outputs, c)
 
-        # A root find with Newton steps through an SVD (LUOrSVD: these equations are not
-        # square, in general): with more unknowns than equations that is Gauss-Newton
-        # with minimum-norm steps, and its implicit derivatives (-J^+ dr/dtheta) need first derivatives of
+        # A root find with Newton steps through an SVD (LUOrSVD: these equations are
+        # not square, in general): with more unknowns than equations that is
+        # Gauss-Newton with minimum-norm steps, and its implicit derivatives (-J^+ dr/dtheta) need first derivatives of
         # the model only. optimistix.least_squares would differentiate grad |r|^2 / 2,
         # which traces second derivatives: on the spin-valve example that took the
         # compile of a batched solve from under 1 GB to over 11 GB.

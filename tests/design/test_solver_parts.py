@@ -126,19 +126,30 @@ def _solve_with(solver, matrix, vector):
     return np.asarray(lx.linear_solve(lx.MatrixLinearOperator(jnp.asarray(matrix)), jnp.asarray(vector), solver).value)
 
 
+def _takes_lu(matrix):
+    (_, _, well, _), _, _ = LUOrSVD().init(lx.MatrixLinearOperator(jnp.asarray(matrix)), {})
+    return bool(well)
+
+
 def test_polish_linear_solver_agrees_with_numpy_on_regular_singular_and_nonsquare_systems():
-    """LU where the matrix is regular; where it is singular (a degenerate active set) or not
-    square, the minimum-norm least-squares answer (numpy's lstsq), never LU's NaN or an
-    arbitrary member of the solutions; each also batched, one member singular."""
+    """LU where the matrix is regular; where it is singular (a degenerate active set), badly
+    scaled so that its LU's pivots look regular, or not square, the minimum-norm
+    least-squares answer (numpy's lstsq), never LU's NaN or an arbitrary member of the
+    solutions; each also batched, one member singular."""
     rng = np.random.default_rng(3)
     regular = rng.normal(size=(5, 5)) + 5 * np.eye(5)
     # rank 3: two rows repeat others, the right side consistent with them
     singular = rng.normal(size=(5, 5))
     singular[3], singular[4] = singular[0], singular[1] + singular[2]
+    # condition 1e20 with pivots 1 and 1: numerically of rank 1
+    scaled = np.array([[1.0, 1e10], [0.0, 1.0]])
     wide = rng.normal(size=(3, 5))
     vector = rng.normal(size=5)
     consistent = singular @ rng.normal(size=5)
-    for matrix, b in ((regular, vector), (singular, consistent), (singular, vector), (wide, vector[:3]), (wide.T, vector)):
+    assert _takes_lu(regular) and not _takes_lu(singular) and not _takes_lu(scaled)
+    cases = ((regular, vector), (singular, consistent), (singular, vector), (scaled, vector[:2]), (wide, vector[:3]),
+             (wide.T, vector))
+    for matrix, b in cases:
         expected = np.linalg.lstsq(matrix, b, rcond=None)[0]
         np.testing.assert_allclose(_solve_with(LUOrSVD(), matrix, b), expected, rtol=1e-9, atol=1e-12)
     batched = jax.vmap(lambda m, b: lx.linear_solve(lx.MatrixLinearOperator(m), b, LUOrSVD()).value)(
@@ -146,17 +157,22 @@ def test_polish_linear_solver_agrees_with_numpy_on_regular_singular_and_nonsquar
     )
     np.testing.assert_allclose(batched[0], np.linalg.solve(regular, vector), rtol=1e-10)
     np.testing.assert_allclose(batched[1], np.linalg.lstsq(singular, consistent, rcond=None)[0], rtol=1e-9, atol=1e-12)
+    # a non-finite right side is NaN, not an error, where the caller asks for no errors
+    nonfinite = jax.jit(lambda b: lx.linear_solve(lx.MatrixLinearOperator(jnp.asarray(regular)), b, LUOrSVD(), throw=False).value)
+    assert np.all(np.isnan(nonfinite(jnp.full(5, jnp.nan))))
 
 
 def test_polish_linear_solver_transposes_for_reverse_mode():
     """Reverse mode solves with the transposed matrix (the solver's ``transpose``): the
-    gradient of sum(A^-1 b) in b is A^-T 1, for a regular and a singular A (pseudo-inverse)."""
+    gradient of sum(A^-1 b) in b is A^-T 1, for a regular, a singular (pseudo-inverse) and
+    a wide A."""
     rng = np.random.default_rng(4)
     regular = rng.normal(size=(4, 4)) + 4 * np.eye(4)
     singular = regular.copy()
     singular[3] = singular[0] - singular[1]
-    for matrix in (regular, singular):
+    wide = rng.normal(size=(3, 4))
+    for matrix in (regular, singular, wide):
         gradient = jax.grad(lambda b: jnp.sum(lx.linear_solve(lx.MatrixLinearOperator(jnp.asarray(matrix)), b, LUOrSVD()).value))(
-            jnp.ones(4)
+            jnp.ones(matrix.shape[0])
         )
-        np.testing.assert_allclose(gradient, np.linalg.pinv(matrix).T @ np.ones(4), rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(gradient, np.linalg.pinv(matrix).T @ np.ones(matrix.shape[1]), rtol=1e-9, atol=1e-12)
