@@ -21,16 +21,17 @@ from lineax.internal import pack_structures, ravel_vector, transpose_packed_stru
 from magdesign.design._qp import where_needed
 
 # A square matrix whose 1-norm condition number (from its LU) is above this goes to the
-# SVD. The 2-norm condition is then below n times this, far below the 1 / (2 n eps) at
-# which lineax's SVD treats a matrix as rank-deficient, so where the LU is taken the SVD
-# would have inverted every singular value too, and the two answers agree to the
-# condition times eps.
+# SVD. Where the LU is taken the 2-norm condition is below n times this, far below the
+# 1 / (2 n eps) at which lineax's SVD treats a matrix as rank-deficient (in float64, for
+# n up to thousands; not in float32), so the SVD would have inverted every singular value
+# too, and the two answers agree to the condition times eps.
 _CONDITION_LIMIT = 1e8
 
 
 class LUOrSVD(lx.AbstractLinearSolver):
     """LU for square, well-conditioned operators; the minimum-norm least-squares solution
-    (as lineax's SVD, or ``scipy.linalg.lstsq``) for the others. Real matrices only."""
+    (as lineax's SVD, or ``scipy.linalg.lstsq``) for the others. Real float64 matrices
+    (the design solver's; see :data:`_CONDITION_LIMIT`)."""
 
     def init(self, operator, options: dict[str, Any]):
         del options

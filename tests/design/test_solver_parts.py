@@ -157,9 +157,14 @@ def test_polish_linear_solver_agrees_with_numpy_on_regular_singular_and_nonsquar
     )
     np.testing.assert_allclose(batched[0], np.linalg.solve(regular, vector), rtol=1e-10)
     np.testing.assert_allclose(batched[1], np.linalg.lstsq(singular, consistent, rcond=None)[0], rtol=1e-9, atol=1e-12)
-    # a non-finite right side is NaN, not an error, where the caller asks for no errors
-    nonfinite = jax.jit(lambda b: lx.linear_solve(lx.MatrixLinearOperator(jnp.asarray(regular)), b, LUOrSVD(), throw=False).value)
-    assert np.all(np.isnan(nonfinite(jnp.full(5, jnp.nan))))
+    # a non-finite right side or matrix (the latter sent to the SVD) is NaN, not an error,
+    # where the caller asks for no errors; in a batch, the other members are unharmed
+    nonfinite = jax.jit(jax.vmap(lambda m, b: lx.linear_solve(lx.MatrixLinearOperator(m), b, LUOrSVD(), throw=False).value))
+    broken = regular.copy()
+    broken[1, 2] = np.nan
+    got = nonfinite(jnp.stack([regular, regular, broken]), jnp.stack([jnp.full(5, jnp.nan), vector, vector]))
+    assert np.all(np.isnan(got[0])) and np.all(np.isnan(got[2]))
+    np.testing.assert_allclose(got[1], np.linalg.solve(regular, vector), rtol=1e-10)
 
 
 def test_polish_linear_solver_transposes_for_reverse_mode():
