@@ -161,8 +161,9 @@ def qp_rows():
         # What the solver runs: active-set rounds from its first-step guess, the interior
         # point method only where they fail (iterations > 0).
         n, n_targets = len(problem.variables), len(problem.targets)
-        guess = solver._no_slack_rows(n, n_targets, (G.shape[0] - 2 * n - 2 * n_targets) // 2)
-        guessed = jax.jit(lambda *args: qp_module.solve_qp(*args, guess=guess))
+        n_limits = (G.shape[0] - 2 * n - 2 * n_targets) // 2
+        guess, box = solver._no_slack_rows(n, n_targets, n_limits), solver.subproblem_box(n, n_targets, n_limits)
+        guessed = jax.jit(lambda *args: qp_module.solve_qp(*args, guess=guess, box=box))
         solution = guessed(Q, q, A, b, G, h)
         seconds = median_time(lambda: guessed(Q, q, A, b, G, h))
         same = bool(np.all((np.asarray(solution.z) > 1e-8) == active))

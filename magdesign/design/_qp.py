@@ -20,13 +20,17 @@ with the guessed rows as equations and the others dropped (one linear solve), th
 rows with a positive multiplier and add the dropped rows that the answer violates. An answer
 is taken only where it satisfies every optimality condition (for a convex QP they are
 sufficient); where no round gives one (a cycle, or dependent rows), the interior-point
-method runs. The default design's first QP takes two rounds, where the interior-point
-method takes 21 iterations of a system twice the size (benchmarks/design.py).
+method runs. Rows that are simple bounds on one unknown (the box and the slacks' signs,
+``box``) are not unknowns of a round's system: a kept one fixes its unknown, and its
+multiplier is read off that unknown's stationarity row afterwards. The default design's
+first QP takes two rounds of an 11 x 11 system, where the interior-point method takes 21
+iterations of a 32 x 32 one (benchmarks/design.py).
 """
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
 # Fraction of the way to the boundary of s, z >= 0 that a step may go.
@@ -61,23 +65,39 @@ class QPSolution(eqx.Module):
     iterations: Int[Array, ""]
 
 
-def _solve_on_active_set(Q, q, A, b, G, h, guess, tol):
+def _solve_on_active_set(Q, q, A, b, G, h, guess, tol, box):
     """The QP's solution if the rows ``guess`` (mi,) are exactly its active ones: (w, y, z,
     ok), ok where the answer meets every optimality condition to ``tol`` (row by row, as
     the interior-point method's own test): stationarity, the equations, the dropped rows
-    held, the kept rows' multipliers non-negative."""
-    nw, me, mi = Q.shape[0], A.shape[0], G.shape[0]
-    kept = guess.astype(Q.dtype)
+    held, the kept rows' multipliers non-negative.
+
+    ``box`` (see :func:`solve_qp`): a kept simple bound fixes its variable, whose
+    stationarity row then leaves the linear system and gives the bound's multiplier
+    afterwards, so the system has nw + me + (mi - len(box rows)) unknowns, not nw + me + mi
+    (11 instead of 20 on the default design: its LU is a third of the cost)."""
+    nw, me = Q.shape[0], A.shape[0]
+    variables, signs = (np.zeros(0, int), np.zeros(0)) if box is None else (np.asarray(box[0]), np.asarray(box[1], float))
+    general = G.shape[0] - variables.shape[0]
+    G_rows, h_rows, kept = G[:general], h[:general], guess[:general].astype(Q.dtype)
+    kept_bounds = guess[general:].astype(Q.dtype)
+    on_variable = np.zeros((variables.shape[0], nw))
+    on_variable[np.arange(variables.shape[0]), variables] = 1.0
+    count = kept_bounds @ on_variable
+    fixed = (count > 0)[:, None]
+    # Two kept bounds on one variable: their mean, which the test below rejects unless equal.
+    value = (kept_bounds * signs * h[general:]) @ on_variable / jnp.maximum(count, 1.0)
     matrix = jnp.block(
         [
-            [Q, A.T, G.T],
-            [A, jnp.zeros((me, me + mi))],
+            [jnp.where(fixed, jnp.eye(nw), Q), jnp.where(fixed, 0.0, A.T), jnp.where(fixed, 0.0, G_rows.T)],
+            [A, jnp.zeros((me, me + general))],
             # A kept row holds as an equation; a dropped row has no multiplier.
-            [kept[:, None] * G, jnp.zeros((mi, me)), jnp.diag(1.0 - kept)],
+            [kept[:, None] * G_rows, jnp.zeros((general, me)), jnp.diag(1.0 - kept)],
         ]
     )
-    solution = jnp.linalg.solve(matrix, jnp.concatenate([-q, b, kept * h]))
-    w, y, z = jnp.split(solution, [nw, nw + me])
+    solution = jnp.linalg.solve(matrix, jnp.concatenate([jnp.where(fixed[:, 0], value, -q), b, kept * h_rows]))
+    w, y, z_rows = jnp.split(solution, [nw, nw + me])
+    stationarity = Q @ w + q + A.T @ y + G_rows.T @ z_rows
+    z = jnp.concatenate([z_rows, kept_bounds * -signs * stationarity[variables]])
     ok = (
         jnp.all(jnp.isfinite(solution))
         & jnp.all(jnp.abs(Q @ w + q + A.T @ y + G.T @ z) <= tol * (1.0 + jnp.abs(q)))
@@ -91,13 +111,9 @@ def _solve_on_active_set(Q, q, A, b, G, h, guess, tol):
     return w, y, jnp.maximum(z, 0.0), ok
 
 
-def solve_qp(Q, q, A, b, G, h, *, guess=None, tol=1e-12, max_iterations=60) -> QPSolution:
-    """Solve the QP above (shapes Q (nw, nw), q (nw,), A (me, nw), b (me,), G (mi, nw),
-    h (mi,)); ``A`` must have full row rank and the feasible set must be non-empty and
-    bounded in the directions where Q is singular (the design solver's QPs have box rows
-    for every variable and elastic slacks, so both hold). ``guess`` (mi,) bool: the rows
-    expected to be active (see the module docstring); ``iterations`` is 0 where it was
-    right."""
+def _interior_point(Q, q, A, b, G, h, needed, tol, max_iterations):
+    """Mehrotra's predictor-corrector from a least-squares start: (w, y, z, converged,
+    iterations) of :func:`solve_qp`'s QP; no iterations where not ``needed``."""
     nw, me, mi = Q.shape[0], A.shape[0], G.shape[0]
 
     def residuals(w, y, z, s):
@@ -154,41 +170,56 @@ def solve_qp(Q, q, A, b, G, h, *, guess=None, tol=1e-12, max_iterations=60) -> Q
     # Start where the dual and equality residuals vanish (the KKT system with s = -z, as
     # cvxopt does), then shift s and z into the positive orthant: a start at z = 1 takes
     # dozens of iterations to grow multipliers of the elastic slacks' size, or diverges.
-    def interior_start(operands):
-        Q, q, A, b, G, h = operands
+    def interior_start():
         matrix = jnp.block([[Q, A.T, G.T], [A, jnp.zeros((me, me + mi))], [G, jnp.zeros((mi, me)), -jnp.eye(mi)]])
         first = jnp.linalg.solve(matrix, jnp.concatenate([-q, b, h]))
         w0, y0, z0 = first[:nw], first[nw : nw + me], first[nw + me :]
         shift = lambda v: v + jnp.maximum(0.0, 1.0 - jnp.min(v, initial=1.0))  # noqa: E731
         return w0, y0, shift(z0), shift(-z0)
 
-    if guess is None:
-        guessed = jnp.asarray(False)
-    else:
-
-        def active_set_round(round_state):
-            rows, _, _, _, _, k = round_state
-            w, y, z, ok = _solve_on_active_set(Q, q, A, b, G, h, rows, tol)
-            # Next: the kept rows with a positive multiplier, and the dropped rows that are
-            # violated. A dropped row's multiplier is zero only up to the solve's rounding
-            # (1e-10 beside the slacks' 1e6), and must not bring it back: where its row was
-            # parallel to a kept one (two limits on one quantity) the next solve was singular.
-            violated = G @ w - h > tol * (1.0 + jnp.abs(h))
-            rows = jnp.where(ok, rows, jnp.where(rows, z > 0.0, violated))
-            return rows, w, y, z, ok, k + 1
-
-        first_round = (guess, jnp.zeros(nw), jnp.zeros(me), jnp.zeros(mi), jnp.asarray(False), jnp.asarray(0))
-        _, w_g, y_g, z_g, guessed, _ = jax.lax.while_loop(
-            lambda st: ~st[4] & (st[5] < _ACTIVE_SET_ROUNDS), active_set_round, first_round
-        )
-    ones = jnp.ones(mi)
-    start = where_needed(~guessed, interior_start, (Q, q, A, b, G, h), (jnp.zeros(nw), jnp.zeros(me), ones, ones))
-    state = (*start, jnp.asarray(0))
-    # Not a lax.cond: under vmap both branches would run, the loop to its end.
-    state = jax.lax.while_loop(lambda st: ~guessed & ~done(st)[0] & (st[4] < max_iterations), body, state)
+    state = (*interior_start(), jnp.asarray(0))
+    state = jax.lax.while_loop(lambda st: needed & ~done(st)[0] & (st[4] < max_iterations), body, state)
     w, y, z, _, iterations = state
-    converged = done(state)[0]
-    if guess is not None:
-        w, y, z = (jnp.where(guessed, a, b) for a, b in ((w_g, w), (y_g, y), (z_g, z)))
-        converged = guessed | converged
-    return QPSolution(w, y, z, converged, iterations)
+    return w, y, z, done(state)[0], iterations
+
+
+def solve_qp(Q, q, A, b, G, h, *, guess=None, box=None, tol=1e-12, max_iterations=60) -> QPSolution:
+    """Solve the QP above (shapes Q (nw, nw), q (nw,), A (me, nw), b (me,), G (mi, nw),
+    h (mi,)); ``A`` must have full row rank and the feasible set must be non-empty and
+    bounded in the directions where Q is singular (the design solver's QPs have box rows
+    for every variable and elastic slacks, so both hold). ``guess`` (mi,) bool: the rows
+    expected to be active (see the module docstring); ``iterations`` is 0 where it was
+    right. ``box``: None, or (variables, signs), two static sequences saying that the last
+    len(variables) rows of G are simple bounds, signs[k] * w[variables[k]] <= h[k] (signs
+    +-1), which the active-set rounds then solve with a smaller system."""
+    nw, me, mi = Q.shape[0], A.shape[0], G.shape[0]
+
+    if guess is None:
+        return QPSolution(*_interior_point(Q, q, A, b, G, h, jnp.asarray(True), tol, max_iterations))
+
+    def active_set_round(round_state):
+        rows, _, _, _, _, k = round_state
+        w, y, z, ok = _solve_on_active_set(Q, q, A, b, G, h, rows, tol, box)
+        # Next: the kept rows with a positive multiplier, and the dropped rows that are
+        # violated. A dropped row's multiplier is zero only up to the solve's rounding
+        # (1e-10 beside the slacks' 1e6), and must not bring it back: where its row was
+        # parallel to a kept one (two limits on one quantity) the next solve was singular.
+        violated = G @ w - h > tol * (1.0 + jnp.abs(h))
+        rows = jnp.where(ok, rows, jnp.where(rows, z > 0.0, violated))
+        return rows, w, y, z, ok, k + 1
+
+    first_round = (guess, jnp.zeros(nw), jnp.zeros(me), jnp.zeros(mi), jnp.asarray(False), jnp.asarray(0))
+    _, w_g, y_g, z_g, guessed, _ = jax.lax.while_loop(
+        lambda st: ~st[4] & (st[5] < _ACTIVE_SET_ROUNDS), active_set_round, first_round
+    )
+    # Inside where_needed, not a lax.cond (under vmap both branches would run, the loop to
+    # its end), nor beside it: XLA hoisted the interior-point loop's invariant parts (its
+    # Newton matrix's blocks) out of the loop, computed at every step in every lane.
+    interior = where_needed(
+        ~guessed,
+        lambda operands: _interior_point(*operands, tol, max_iterations),
+        (Q, q, A, b, G, h, ~guessed),
+        (jnp.zeros(nw), jnp.zeros(me), jnp.zeros(mi), jnp.asarray(False), jnp.asarray(0)),
+    )
+    w, y, z = (jnp.where(guessed, a, b) for a, b in ((w_g, interior[0]), (y_g, interior[1]), (z_g, interior[2])))
+    return QPSolution(w, y, z, guessed | interior[3], interior[4])

@@ -115,11 +115,37 @@ def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
     jet = solver._jet(problem, y0, jnp.asarray(theta))
     n, n_targets, m = y0.shape[0], len(problem.targets), jet.v.shape[0] - 1
     parts = solver.subproblem(jet, y0, y_max, jnp.zeros(m), 1.0 / jnp.linalg.norm(jet.J[0]), n_targets, True)
-    guessed = qp.solve_qp(*parts, guess=solver._no_slack_rows(n, n_targets, m - n_targets))
+    guess = solver._no_slack_rows(n, n_targets, m - n_targets)
     reference = qp.solve_qp(*parts)
-    assert bool(guessed.converged) and int(guessed.iterations) == 0
     assert int(reference.iterations) > 0
-    np.testing.assert_allclose(guessed.w, reference.w, rtol=0, atol=1e-9)
+    for box in (None, solver.subproblem_box(n, n_targets, m - n_targets)):
+        guessed = qp.solve_qp(*parts, guess=guess, box=box)
+        assert bool(guessed.converged) and int(guessed.iterations) == 0
+        np.testing.assert_allclose(guessed.w, reference.w, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(guessed.z, reference.z, rtol=1e-6, atol=1e-6)
+
+
+def test_active_set_rounds_with_simple_bounds_match_the_closed_form():
+    """minimise (w0 - 2)^2 + (w1 + 3)^2 subject to w0 + w1 <= 0.5 and the box [-1, 1]^2,
+    the box given as simple bounds (``box``). By hand: w = (1, -1), the general row slack
+    (0 <= 0.5), multipliers 2 on w0 <= 1 and 4 on -w1 <= 1, the others 0. From every
+    guess of one or two box rows (those that are wrong take more rounds, or end in the
+    interior-point method) and the none guess, with the general row kept or not."""
+    Q, q = 2.0 * jnp.eye(2), jnp.array([-4.0, 6.0])
+    A, b = jnp.zeros((0, 2)), jnp.zeros(0)
+    G = jnp.array([[1.0, 1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    h = jnp.array([0.5, 1.0, 1.0, 1.0, 1.0])
+    box = (np.array([0, 1, 0, 1]), np.array([1.0, 1.0, -1.0, -1.0]))
+    expected_z = np.array([0.0, 2.0, 0.0, 0.0, 4.0])
+    guesses = [np.zeros(5, bool)] + [np.eye(5, dtype=bool)[i] | np.eye(5, dtype=bool)[j] for i in range(5) for j in range(5)]
+    right = expected_z > 0
+    for guess in guesses:
+        solution = qp.solve_qp(Q, q, A, b, G, h, guess=jnp.asarray(guess), box=box)
+        assert bool(solution.converged), guess
+        np.testing.assert_allclose(solution.w, [1.0, -1.0], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(solution.z, expected_z, rtol=0, atol=1e-8)
+        if np.array_equal(guess, right):
+            assert int(solution.iterations) == 0
 
 
 def _solve_with(solver, matrix, vector):
