@@ -84,8 +84,10 @@ def _solve_on_active_set(Q, q, A, b, G, h, guess, tol, box):
     on_variable[np.arange(variables.shape[0]), variables] = 1.0
     count = kept_bounds @ on_variable
     fixed = (count > 0)[:, None]
-    # Two kept bounds on one variable: their mean, which the test below rejects unless equal.
-    value = (kept_bounds * signs * h[general:]) @ on_variable / jnp.maximum(count, 1.0)
+    # Two kept bounds on one variable: their mean, which the test below accepts only where
+    # it is an optimum (the variable's stationarity row then holds with both multipliers 0).
+    # A dropped bound may be infinite: kept * inf would be NaN.
+    value = jnp.where(kept_bounds > 0, signs * h[general:], 0.0) @ on_variable / jnp.maximum(count, 1.0)
     matrix = jnp.block(
         [
             [jnp.where(fixed, jnp.eye(nw), Q), jnp.where(fixed, 0.0, A.T), jnp.where(fixed, 0.0, G_rows.T)],

@@ -126,27 +126,38 @@ def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
 
 
 def test_active_set_rounds_with_simple_bounds_match_the_closed_form():
-    """minimise (w0 - 2)^2 + (w1 + 3)^2 subject to w0 + w1 <= 0.5 and the box [-1, 1]^2,
-    the box given as simple bounds (``box``). By hand: w = (1, -1), the general row slack
-    (0 <= 0.5), multipliers 2 on w0 <= 1 and 4 on -w1 <= 1, the others 0. From every
-    guess of one or two box rows (those that are wrong take more rounds, or end in the
-    interior-point method) and the none guess, with the general row kept or not."""
-    Q, q = 2.0 * jnp.eye(2), jnp.array([-4.0, 6.0])
-    A, b = jnp.zeros((0, 2)), jnp.zeros(0)
-    G = jnp.array([[1.0, 1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
-    h = jnp.array([0.5, 1.0, 1.0, 1.0, 1.0])
-    box = (np.array([0, 1, 0, 1]), np.array([1.0, 1.0, -1.0, -1.0]))
-    expected_z = np.array([0.0, 2.0, 0.0, 0.0, 4.0])
-    guesses = [np.zeros(5, bool)] + [np.eye(5, dtype=bool)[i] | np.eye(5, dtype=bool)[j] for i in range(5) for j in range(5)]
+    """minimise (w0 - 2)^2 + (w1 + 3)^2 + (w2 - 2)^2 subject to w0 + w2 = 1.5,
+    w0 / 2 - w1 + w2 <= 1.5 and the box [-1, 1]^3, the box given as simple bounds
+    (``box``). By hand: at w = (1, -0.5, 0.5) the gradient is (-2, 5, -3); stationarity
+    row by row gives the general row's multiplier 5, the equation's -2 and w0 <= 1's 1.5,
+    the other bounds' 0: a KKT point of a convex QP, so its minimum. The fixed variable w0
+    appears in the equation and the general row, so each of their terms in the bound's
+    multiplier counts. Batched (vmap) over every guess of one or two rows, none and all:
+    each ends at the minimum; the right guess without interior-point iterations (with a
+    wrong multiplier the optimality test would reject it, and the rounds would cycle into
+    that method), also with an infinite bound among the dropped rows."""
+    Q, q = 2.0 * jnp.eye(3), jnp.array([-4.0, 6.0, -4.0])
+    A, b = jnp.array([[1.0, 0.0, 1.0]]), jnp.array([1.5])
+    G = jnp.concatenate([jnp.array([[0.5, -1.0, 1.0]]), jnp.eye(3), -jnp.eye(3)])
+    h = jnp.array([1.5, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+    box = (np.array([0, 1, 2, 0, 1, 2]), np.array([1.0, 1.0, 1.0, -1.0, -1.0, -1.0]))
+    expected_w, expected_y = np.array([1.0, -0.5, 0.5]), np.array([-2.0])
+    expected_z = np.array([5.0, 1.5, 0.0, 0.0, 0.0, 0.0, 0.0])
     right = expected_z > 0
-    for guess in guesses:
-        solution = qp.solve_qp(Q, q, A, b, G, h, guess=jnp.asarray(guess), box=box)
-        assert bool(solution.converged), guess
-        np.testing.assert_allclose(solution.w, [1.0, -1.0], rtol=0, atol=1e-9)
-        np.testing.assert_allclose(solution.z, expected_z, rtol=0, atol=1e-8)
-        if np.array_equal(guess, right):
-            assert int(solution.iterations) == 0
-
+    rows = np.eye(7, dtype=bool)
+    guesses = np.stack([np.zeros(7, bool), np.ones(7, bool)] + [rows[i] | rows[j] for i in range(7) for j in range(7)])
+    solve = jax.jit(jax.vmap(lambda guess, h: qp.solve_qp(Q, q, A, b, G, h, guess=guess, box=box), in_axes=(0, None)))
+    solution = solve(jnp.asarray(guesses), h)
+    assert np.all(solution.converged)
+    np.testing.assert_allclose(solution.w, np.broadcast_to(expected_w, (len(guesses), 3)), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(solution.y, np.broadcast_to(expected_y, (len(guesses), 1)), rtol=0, atol=1e-8)
+    np.testing.assert_allclose(solution.z, np.broadcast_to(expected_z, (len(guesses), 7)), rtol=0, atol=1e-8)
+    iterations = np.asarray(solution.iterations)
+    assert iterations[np.all(guesses == right, axis=1)].tolist() == [0, 0]  # rows (0, 1) and (1, 0)
+    unbounded_below = solve(jnp.asarray(right[None]), h.at[5].set(jnp.inf))
+    assert int(unbounded_below.iterations[0]) == 0
+    np.testing.assert_allclose(unbounded_below.w[0], expected_w, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(unbounded_below.z[0], np.where(np.arange(7) == 5, 0.0, expected_z), rtol=0, atol=1e-12)
 
 def _solve_with(solver, matrix, vector):
     return np.asarray(lx.linear_solve(lx.MatrixLinearOperator(jnp.asarray(matrix)), jnp.asarray(vector), solver).value)
