@@ -5,14 +5,18 @@
 Prints, each measured in a fresh process (the number of host devices is fixed when JAX
 starts):
 - a grid of N (default 10,000) Reissner-level default designs (dome outer radius x target
-  compliance), on 1 and on 2 host devices (``--devices``): first call (compile included),
-  warm time, solves per second, the speed-up of 2 devices, and the peak memory;
+  compliance), on 1 and on 2 host devices (``--devices``), and on 1 device held to one
+  core: first call (compile included), warm time, solves per second, the speed-up of 2
+  devices, and the peak memory. One XLA CPU device already spreads its larger operations
+  over every core, so two devices can at most double the one-core rate: the benchmark
+  prints that bound beside the speed-up;
 - with ``--million``: 1,000,000 such points (chunked), their time and peak memory;
 - unless skipped: a 200-point sweep of the target compliance at the axisymmetric level.
 """
 
 import argparse
 import json
+import os
 import resource
 import subprocess
 import sys
@@ -23,8 +27,10 @@ import numpy as np
 mm = 1e-3
 
 
-def child(devices, points, fidelity):
-    """One measurement in this process: JSON on stdout."""
+def child(devices, points, fidelity, cores):
+    """One measurement in this process (on its first ``cores`` CPUs if given): JSON on stdout."""
+    if cores:
+        os.sched_setaffinity(0, sorted(os.sched_getaffinity(0))[:cores])  # before JAX starts its threads
     import jax
 
     jax.config.update("jax_num_cpu_devices", devices)
@@ -52,8 +58,9 @@ def child(devices, points, fidelity):
     }))
 
 
-def measure(devices, points, fidelity="reissner"):
+def measure(devices, points, fidelity="reissner", cores=None):
     command = [sys.executable, __file__, "--child", str(devices), "--points", str(points), "--fidelity", fidelity]
+    command += ["--cores", str(cores)] if cores else []
     run = subprocess.run(command, capture_output=True, text=True, check=True)
     return json.loads(run.stdout.strip().splitlines()[-1])
 
@@ -71,23 +78,30 @@ def main():
     parser.add_argument("--skip-axisymmetric", action="store_true")
     parser.add_argument("--child", type=int)
     parser.add_argument("--fidelity", default="reissner")
+    parser.add_argument("--cores", type=int)
     args = parser.parse_args()
     if args.child:
-        return child(args.child, args.points, args.fidelity)
+        return child(args.child, args.points, args.fidelity, args.cores)
 
-    rows = [("sweep", "devices", "points", "successful", "first call (s)", "warm (s)", "solves/s", "peak memory (MB)")]
+    rows = [("sweep", "devices", "cores", "points", "successful", "first call (s)", "warm (s)", "solves/s",
+             "peak memory (MB)")]
     results = {}
-    runs = [(1, args.points, "reissner"), (2, args.points, "reissner")]
-    runs += [(2, 1_000_000, "reissner")] if args.million else []
-    runs += [] if args.skip_axisymmetric else [(2, 200, "axisymmetric")]
-    for devices, points, fidelity in runs:
-        print(f"measuring {points} points at {fidelity} on {devices} device(s) ...", file=sys.stderr, flush=True)
-        r = results[devices, points, fidelity] = measure(devices, points, fidelity)
-        rows.append((f"default design, {fidelity}", devices, r["points"], r["successful"], f"{r['first_s']:.2f}",
-                     f"{r['warm_s']:.2f}", f"{r['points'] / r['warm_s']:.0f}", f"{r['peak_mb']:.0f}"))
+    all_cores = len(os.sched_getaffinity(0))
+    runs = [(1, args.points, "reissner", None), (2, args.points, "reissner", None), (1, args.points, "reissner", 1)]
+    runs += [(2, 1_000_000, "reissner", None)] if args.million else []
+    runs += [] if args.skip_axisymmetric else [(2, 200, "axisymmetric", None)]
+    for devices, points, fidelity, cores in runs:
+        print(f"measuring {points} points at {fidelity} on {devices} device(s), {cores or all_cores} core(s) ...",
+              file=sys.stderr, flush=True)
+        r = results[devices, points, fidelity, cores] = measure(devices, points, fidelity, cores)
+        rows.append((f"default design, {fidelity}", devices, cores or all_cores, r["points"], r["successful"],
+                     f"{r['first_s']:.2f}", f"{r['warm_s']:.2f}", f"{r['points'] / r['warm_s']:.0f}",
+                     f"{r['peak_mb']:.0f}"))
     table(rows)
-    one, two = results[1, args.points, "reissner"], results[2, args.points, "reissner"]
+    one, two, one_core = (results[devices, args.points, "reissner", cores] for devices, cores in ((1, None), (2, None), (1, 1)))
     print(f"\n2 host devices against 1: {one['warm_s'] / two['warm_s']:.2f}x (warm)")
+    print(f"one device on {all_cores} cores against one core: {one_core['warm_s'] / one['warm_s']:.2f}x; so 2 devices "
+          f"can gain at most {min(2, all_cores) * one['warm_s'] / one_core['warm_s']:.2f}x over one")
 
 
 if __name__ == "__main__":

@@ -84,6 +84,7 @@ from magdesign._numerics import (
     TINY,
     safe_div,
 )
+from magdesign._tracing import traced_once
 from magdesign.design._linear import LUOrSVD
 from magdesign.design._qp import solve_qp, where_needed
 from magdesign.design.problem import Problem, per_problem
@@ -202,6 +203,7 @@ def _values(problem, y, theta):
     return jnp.concatenate([f[None], c]), jnp.stack([outputs[name] for name in problem.outputs])
 
 
+@traced_once
 def _first_jet(problem, y, theta):
     """(J, (v, outputs)) at y: the model's first derivatives, by forward mode."""
 
@@ -212,6 +214,7 @@ def _first_jet(problem, y, theta):
     return jax.jacfwd(values, has_aux=True)(y)
 
 
+@traced_once
 def _jet(problem, y, theta) -> Jet:
     """The :class:`Jet` at y from one trace of the model (forward over forward mode)."""
     if problem.objective is None:

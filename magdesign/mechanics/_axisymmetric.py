@@ -66,6 +66,7 @@ from magdesign._numerics import (
     DOME_ROUNDING_SLACK,
     smooth_ramp,
 )
+from magdesign._tracing import traced_once
 from magdesign.mechanics import _blocks
 from magdesign.mechanics.materials import excess_invariants
 
@@ -305,6 +306,7 @@ def potential(mesh, y, params, force=0.0):
     return jnp.sum(elastic) + jnp.sum(contact) - force * y[-1]
 
 
+@traced_once
 def derivatives(mesh, y, params):
     """Gradient (size,) and Hessian (size, size) of :func:`potential` (force 0) in y.
 

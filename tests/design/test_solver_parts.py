@@ -6,12 +6,14 @@ linear solver (LU, else SVD) against numpy."""
 
 import importlib
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import lineax as lx
 import numpy as np
+import pytest
 
-from magdesign.design import Limit, Objective, Problem, Target, Variable
+from magdesign.design import Limit, Objective, Problem, Target, Variable, solve, sweep
 from magdesign.design._linear import LUOrSVD
 from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.design.sweep import with_fixed
@@ -159,6 +161,7 @@ def test_active_set_rounds_with_simple_bounds_match_the_closed_form():
     np.testing.assert_allclose(unbounded_below.w[0], expected_w, rtol=0, atol=1e-12)
     np.testing.assert_allclose(unbounded_below.z[0], np.where(np.arange(7) == 5, 0.0, expected_z), rtol=0, atol=1e-12)
 
+
 def _solve_with(solver, matrix, vector):
     return np.asarray(lx.linear_solve(lx.MatrixLinearOperator(jnp.asarray(matrix)), jnp.asarray(vector), solver).value)
 
@@ -218,3 +221,44 @@ def test_polish_linear_solver_transposes_for_reverse_mode():
             jnp.ones(matrix.shape[0])
         )
         np.testing.assert_allclose(gradient, np.linalg.pinv(matrix).T @ np.ones(matrix.shape[1]), rtol=1e-9, atol=1e-12)
+
+
+def test_the_model_is_traced_once_for_a_solve_and_a_sweep():
+    """The search, the polish (its Newton steps, optimistix's shape checks, the implicit
+    derivatives in theta) and a batch all use the model's derivatives: JAX transforms one
+    trace of the model instead of tracing it again at each place (the solver traced it
+    four times before; once, an axisymmetric design traces in 42 s instead of 54)."""
+    calls = []
+
+    def model(v):
+        calls.append(1)
+        return {"f": (v["x"] - 0.3) ** 2 + v["a"] * v["y"] ** 2, "g": v["x"] + v["y"]}
+
+    problem = Problem(model, [Variable("x", -1.0, 1.0), Variable("y", -1.0, 1.0)], targets=[Target("g", 0.5)],
+                      objective=Objective("f", "min"), fixed={"a": 2.0})
+    result = solve(problem)
+    assert result.status == "successful"
+    # x - 0.3 = 2 y (stationarity) and x + y = 0.5
+    np.testing.assert_allclose([result.parameters["x"], result.parameters["y"]], [13 / 30, 1 / 15], atol=1e-9)
+    assert len(calls) == 1
+    batch = sweep(problem, {"g": [0.2, 0.5]})
+    assert np.all(batch.successful)
+    assert len(calls) == 1
+
+
+def test_a_model_traced_outside_the_solver_keeps_raising_its_errors_and_inside_gives_a_status():
+    """The solver traces a model with equinox's runtime errors as NaN (reported as a
+    status), a plain call with errors raised; the trace of one is never reused by the other."""
+    import equinox as eqx
+
+    def model(v):
+        return {"f": eqx.error_if(v["x"] ** 2, v["x"] > 0.5, "x above 0.5"), "g": v["x"]}
+
+    problem = Problem(model, [Variable("x", -1.0, 1.0)], targets=[Target("g", 0.8)], objective=Objective("f", "min"))
+    y0, theta = jnp.asarray([0.9]), jnp.asarray(solver.problem_arrays(problem, np)[4])
+    with pytest.raises(Exception, match="x above 0.5"):
+        jax.block_until_ready(solver._jet(problem, y0, theta))
+    # the NaN beyond x = 0.5 stops the search short of the target: a status, no exception
+    assert solve(problem).status == "infeasible_target"
+    with pytest.raises(Exception, match="x above 0.5"):
+        jax.block_until_ready(solver._jet(problem, y0, theta))
