@@ -14,6 +14,12 @@ def traced_once(fn):
     costly code called at several places of a program (a model's derivatives, a dome's
     tangent).
 
+    Arguments that are not arrays are static, Python floats too: a float that changes
+    from call to call is a new trace and compile each time (pass arrays). The traces are
+    kept in JAX's caches, and with them their static arguments
+    (a design problem and its model, a mesh): ``jax.clear_caches()`` frees them. A
+    global that the function reads is read once, when it is traced.
+
     Two things that a trace depends on are part of the key: equinox's error mode, which
     equinox's runtime checks read when traced (the design solver traces with errors as
     NaN, a plain call with errors raised), and the abstract mesh. JAX's derivatives of

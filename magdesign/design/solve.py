@@ -197,6 +197,7 @@ class Jet(eqx.Module):
     outputs: Float[Array, " k"]
 
 
+@traced_once
 def _values(problem, y, theta):
     """(v, outputs) at y: (objective, constraint rows...) and the named outputs."""
     outputs, c, f = _evaluate(problem, y, theta)

@@ -223,42 +223,50 @@ def test_polish_linear_solver_transposes_for_reverse_mode():
         np.testing.assert_allclose(gradient, np.linalg.pinv(matrix).T @ np.ones(matrix.shape[1]), rtol=1e-9, atol=1e-12)
 
 
-def test_the_model_is_traced_once_for_a_solve_and_a_sweep():
+@pytest.mark.parametrize("objective", [Objective("f", "min"), None])
+def test_the_model_is_traced_once_for_a_solve_and_a_sweep(objective):
     """The search, the polish (its Newton steps, optimistix's shape checks, the implicit
-    derivatives in theta) and a batch all use the model's derivatives: JAX transforms one
-    trace of the model instead of tracing it again at each place (the solver traced it
-    four times before; once, an axisymmetric design traces in 42 s instead of 54)."""
+    derivatives in theta) and a batch all use the model or its derivatives: JAX transforms
+    one trace of the model instead of tracing it again at each place (four times before,
+    with an objective; a feasibility problem's polish alike)."""
     calls = []
 
     def model(v):
         calls.append(1)
-        return {"f": (v["x"] - 0.3) ** 2 + v["a"] * v["y"] ** 2, "g": v["x"] + v["y"]}
+        return {"f": (v["x"] - 0.3) ** 2 + v["a"] * v["y"] ** 2, "g": v["x"] + v["y"], "h": v["x"] - v["y"]}
 
-    problem = Problem(model, [Variable("x", -1.0, 1.0), Variable("y", -1.0, 1.0)], targets=[Target("g", 0.5)],
-                      objective=Objective("f", "min"), fixed={"a": 2.0})
+    targets = [Target("g", 0.5)] + ([] if objective else [Target("h", 0.3)])
+    problem = Problem(model, [Variable("x", -1.0, 1.0), Variable("y", -1.0, 1.0)], targets=targets,
+                      objective=objective, fixed={"a": 2.0})
     result = solve(problem)
     assert result.status == "successful"
-    # x - 0.3 = 2 y (stationarity) and x + y = 0.5
-    np.testing.assert_allclose([result.parameters["x"], result.parameters["y"]], [13 / 30, 1 / 15], atol=1e-9)
+    # with the objective: x - 0.3 = 2 y (stationarity) and x + y = 0.5; without: x + y = 0.5, x - y = 0.3
+    expected = [13 / 30, 1 / 15] if objective else [0.4, 0.1]
+    np.testing.assert_allclose([result.parameters["x"], result.parameters["y"]], expected, atol=1e-9)
     assert len(calls) == 1
     batch = sweep(problem, {"g": [0.2, 0.5]})
     assert np.all(batch.successful)
     assert len(calls) == 1
 
 
-def test_a_model_traced_outside_the_solver_keeps_raising_its_errors_and_inside_gives_a_status():
-    """The solver traces a model with equinox's runtime errors as NaN (reported as a
-    status), a plain call with errors raised; the trace of one is never reused by the other."""
-    import equinox as eqx
-
+def _raising_problem():
     def model(v):
         return {"f": eqx.error_if(v["x"] ** 2, v["x"] > 0.5, "x above 0.5"), "g": v["x"]}
 
     problem = Problem(model, [Variable("x", -1.0, 1.0)], targets=[Target("g", 0.8)], objective=Objective("f", "min"))
-    y0, theta = jnp.asarray([0.9]), jnp.asarray(solver.problem_arrays(problem, np)[4])
-    with pytest.raises(Exception, match="x above 0.5"):
-        jax.block_until_ready(solver._jet(problem, y0, theta))
-    # the NaN beyond x = 0.5 stops the search short of the target: a status, no exception
-    assert solve(problem).status == "infeasible_target"
-    with pytest.raises(Exception, match="x above 0.5"):
-        jax.block_until_ready(solver._jet(problem, y0, theta))
+    return problem, jnp.asarray([0.9]), jnp.asarray(solver.problem_arrays(problem, np)[4])
+
+
+@pytest.mark.parametrize("solve_first", [False, True])
+def test_a_model_traced_outside_the_solver_keeps_raising_its_errors_and_inside_gives_a_status(solve_first):
+    """The solver traces a model with equinox's runtime errors as NaN (reported as a
+    status), a plain call with errors raised; neither reuses the other's trace, whichever
+    comes first."""
+    problem, y0, theta = _raising_problem()
+    for step in ("solve", "plain", "solve") if solve_first else ("plain", "solve", "plain"):
+        if step == "solve":
+            # the NaN beyond x = 0.5 stops the search short of the target: a status, no exception
+            assert solve(problem).status == "infeasible_target"
+        else:
+            with pytest.raises(Exception, match="x above 0.5"):
+                jax.block_until_ready(solver._jet(problem, y0, theta))

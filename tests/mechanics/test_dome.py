@@ -374,9 +374,8 @@ def test_a_second_plain_call_reuses_the_compiled_program(caplog):
 def test_the_tangent_is_traced_once_for_a_compliance_and_its_second_derivatives(monkeypatch):
     """The path's Newton steps, its tangents and the implicit derivatives (to second
     order, as a design's search takes them) all use the dome's tangent: JAX transforms one
-    trace of it (it was traced five times; once, an axisymmetric design traces in 26 s
-    instead of 42).
-    A mesh no other test uses, so that no earlier trace is reused."""
+    trace of it (five traces before). A mesh no other test uses, so that no earlier trace
+    is reused: run once per process."""
     traced = []
     element_derivatives = _axisymmetric._element_derivatives
 
