@@ -108,5 +108,6 @@ def main():
         print(f"one device on {all_cores} cores against {half}: {held['warm_s'] / one['warm_s']:.2f}x; "
               f"so 2 devices can gain at most {2 * one['warm_s'] / held['warm_s']:.2f}x over one")
 
+
 if __name__ == "__main__":
     main()
