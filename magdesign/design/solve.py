@@ -30,7 +30,9 @@ to its target or limit. It has two stages:
    is too inexact for it (measured in benchmarks/design.py).
 2. exact polish (optimistix): with the active set of the last subproblem, the KKT system
    (stationarity on the free variables, targets and active limits as equations, active
-   bounds as fixed variables) is solved by ``optimistix.root_find`` (Newton); a problem
+   bounds as fixed variables) is solved by ``optimistix.root_find`` (Newton, from the
+   point of Newton's first step, which is taken from the search's last jet, so that the
+   model is not evaluated again where the search has just evaluated it); a problem
    without objective is a feasibility problem, whose equations (targets, active limits,
    fixed variables; in general fewer than the unknowns) go to ``optimistix.root_find``
    too, where Newton through an SVD is Gauss-Newton with minimum-norm steps (see
@@ -59,6 +61,7 @@ import equinox as eqx
 import equinox._errors as _equinox_errors
 import jax
 import jax.numpy as jnp
+import lineax as lx
 import numpy as np
 import optimistix as optx
 from jax.experimental import multihost_utils
@@ -84,7 +87,7 @@ from magdesign._numerics import (
     TINY,
     safe_div,
 )
-from magdesign._tracing import traced_once
+from magdesign._tracing import compiler_options, traced_once
 from magdesign.design._linear import LUOrSVD
 from magdesign.design._qp import solve_qp, where_needed
 from magdesign.design.problem import Problem, per_problem
@@ -651,6 +654,21 @@ class _KKT(eqx.Module):
         r_y = jnp.where(self.active.fixed, self.active.fixed_residual(y, self.y_max), stationarity)
         return jnp.concatenate([r_y, jnp.where(self.equations, c, lam)])
 
+    def tangent(self, jet, lam, dy, dlam):
+        """The residual's derivative along (dy, dlam) in z at a point with the model's
+        :class:`Jet` ``jet`` and multipliers ``lam``."""
+        d_stationarity = _lagrangian_hessian(jet, lam, self.weight) @ dy + jet.J[1:].T @ dlam
+        return jnp.concatenate([jnp.where(self.active.fixed, dy, d_stationarity), jnp.where(self.equations, jet.J[1:] @ dy, dlam)])
+
+    def newton_step(self, z, jet):
+        """z less Newton's step from z, where the model's :class:`Jet` is ``jet``: the
+        step that optimistix's Newton takes from z (the same linear solver)."""
+        n = self.y_max.shape[0]
+        y, lam = z[:n], z[n:]
+        jacobian = jax.vmap(lambda dz: self.tangent(jet, lam, dz[:n], dz[n:]), out_axes=1)(jnp.eye(z.shape[0]))
+        residual = self.rows(y, lam, jet.J, jet.v[1:])
+        return z - lx.linear_solve(lx.MatrixLinearOperator(jacobian), residual, LUOrSVD(), throw=False).value
+
     def __call__(self, z, theta):
         n = self.y_max.shape[0]
         J, (v, outputs) = _first_jet(self.problem, z[:n], theta)
@@ -677,8 +695,7 @@ def _kkt_residual_jvp(primals, tangents, *, kkt: _KKT):
     n = kkt.y_max.shape[0]
     y, lam, dy, dlam = z[:n], z[n:], dz[:n], dz[n:]
     jet = _jet(kkt.problem, y, theta)
-    d_stationarity = _lagrangian_hessian(jet, lam, kkt.weight) @ dy + jet.J[1:].T @ dlam
-    dr = jnp.concatenate([jnp.where(kkt.active.fixed, dy, d_stationarity), jnp.where(kkt.equations, jet.J[1:] @ dy, dlam)])
+    dr = kkt.tangent(jet, lam, dy, dlam)
     if dtheta is not None:
         dr = dr + jax.jvp(lambda theta: kkt(z, theta)[0], (theta,), (dtheta,))[1]
     aux = (jet.outputs, jet.v[1:])
@@ -696,11 +713,14 @@ def _last_evaluated(solution):
     return z, jnp.max(jnp.abs(solution.state.f), initial=0.0), solution.aux
 
 
-def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, settings: Settings, y_max):
+def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, settings: Settings, y_max, jet=None):
     """The exact solution of the active set's equations near (y, multipliers), by
     optimistix (see the module docstring). Returns (y, multipliers, residual, aux, result)
     with ``residual`` the largest entry of the KKT (or feasibility) residual and ``aux``
-    = (outputs, c) at the polished point; differentiable in theta (implicit)."""
+    = (outputs, c) at the polished point; differentiable in theta (implicit). ``jet``:
+    None, or the model's :class:`Jet` at y, already evaluated (the search's), from
+    which a problem with an objective takes Newton's first step before optimistix takes
+    over: one evaluation of the model less (non-finite where there is none)."""
     n, n_targets = y.shape[0], len(problem.targets)
     equations = jnp.concatenate([jnp.ones(n_targets, bool), active.limits])
     solver_options = dict(rtol=settings.rtol * 1e-3, atol=settings.rtol * 1e-3, linear_solver=LUOrSVD())
@@ -729,6 +749,9 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
 
     kkt = _KKT(problem, weight, active, equations, y_max)
     z0 = jnp.concatenate([y, jnp.where(equations, multipliers, 0.0)])
+    if jet is not None:
+        z1 = kkt.newton_step(z0, jet)
+        z0 = jnp.where(jnp.all(jnp.isfinite(z1)), z1, z0)
     solution = optx.root_find(
         lambda z, theta: _kkt_residual(z, theta, kkt=kkt), optx.Newton(**solver_options), z0, theta, has_aux=True,
         max_steps=settings.max_steps, adjoint=adjoint, throw=False,
@@ -749,10 +772,13 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     active = _Active(step.active_limits, step.at_lower, step.at_upper)
     y_start = jax.lax.stop_gradient(search.y)
     multipliers_start = jax.lax.stop_gradient(step.multipliers)
+    # the search's last jet is the model's at y_start once it has accepted a point
+    accepted = (search.phase != START) & (search.phase != NONFINITE_START)
+    jet = jax.tree.map(lambda a: jnp.where(accepted, a, jnp.nan), jax.lax.stop_gradient(search.jet))
 
     def polished(theta):
         y, multipliers, residual, aux, result = _polish(
-            problem, y_start, multipliers_start, theta, active, search.weight, settings, y_max
+            problem, y_start, multipliers_start, theta, active, search.weight, settings, y_max, jet
         )
         return y, (y, multipliers, residual, aux, result)
 
@@ -886,7 +912,7 @@ def _compiled(key, batched):
         problem, settings = (_joined(part_key, part) for part_key, part in zip(key, arrays))
         return _packed(problem, y0, theta, settings)
 
-    return jax.jit(jax.vmap(run, in_axes=(None, 0, 0)) if batched else run)
+    return jax.jit(jax.vmap(run, in_axes=(None, 0, 0)) if batched else run, compiler_options=compiler_options())
 
 
 def _joined(key, arrays):

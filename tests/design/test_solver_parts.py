@@ -103,6 +103,46 @@ def test_polish_returns_the_residual_and_outputs_of_the_point_it_returns():
         np.testing.assert_allclose(c, expected_c, rtol=1e-12)
 
 
+def test_polish_starts_from_the_search_jet_without_evaluating_the_model_again(monkeypatch):
+    """The polish starts at the search's last point, whose jet the search has, and takes
+    Newton's first step from it: the model is evaluated once less (counted by a callback
+    in the model) than where the polish is given no jet, and the answer, with its
+    derivatives, is the same."""
+    calls = []
+
+    def model(v):
+        jax.debug.callback(lambda: calls.append(1))
+        return {"f": v["x"] + 2.0 * v["y"] + v["a"] * v["x"] ** 2, "r2": v["x"] ** 2 + v["y"] ** 2}
+
+    problem = Problem(model, [Variable("x", -3.0, 3.0), Variable("y", -3.0, 3.0)], targets=[Target("r2", 2.0)],
+                      objective=Objective("f", "min"), fixed={"a": 0.1})
+    theta = jnp.asarray(solver.problem_arrays(problem, np)[4])
+    jax.jit(lambda y: solver._jet(problem, y, theta))(jnp.array([0.3, 0.4])).v.block_until_ready()
+    per_jet, _ = len(calls), calls.clear()
+    assert per_jet >= 1
+
+    def solved():
+        calls.clear()
+        result = solve(problem)
+        assert result.status == "successful"
+        return len(calls), result
+
+    count, result = solved()
+    jax.clear_caches()
+    solver._compiled.cache_clear()
+    polish = solver._polish
+    monkeypatch.setattr(solver, "_polish", lambda *args: polish(*args[:8]))  # without the search's jet
+    count_without, result_without = solved()
+    solver._compiled.cache_clear()
+    assert count == count_without - per_jet
+    for name, value in result_without.parameters.items():
+        np.testing.assert_allclose(result.parameters[name], value, rtol=1e-13)
+    for key, row in result_without.derivatives.items():
+        for name, value in row.items():
+            assert np.isfinite(value)
+            np.testing.assert_allclose(result.derivatives[key][name], value, rtol=1e-12)
+
+
 def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
     """The default design at outer radius 6 mm and compliance 0.2545 mm/N: its field limit
     and closest-gap limit rows are parallel at the start. A dropped row's multiplier of 1e-10
