@@ -655,19 +655,19 @@ class _KKT(eqx.Module):
         return jnp.concatenate([r_y, jnp.where(self.equations, c, lam)])
 
     def tangent(self, jet, lam, dy, dlam):
-        """The residual's derivative along (dy, dlam) in z at a point with the model's
-        :class:`Jet` ``jet`` and multipliers ``lam``."""
+        """(n + m,) the residual's derivative along (dy (n,), dlam (m,)) in z at a point
+        with the model's :class:`Jet` ``jet`` and multipliers ``lam`` (m,)."""
         d_stationarity = _lagrangian_hessian(jet, lam, self.weight) @ dy + jet.J[1:].T @ dlam
         return jnp.concatenate([jnp.where(self.active.fixed, dy, d_stationarity), jnp.where(self.equations, jet.J[1:] @ dy, dlam)])
 
-    def newton_step(self, z, jet):
-        """z less Newton's step from z, where the model's :class:`Jet` is ``jet``: the
-        step that optimistix's Newton takes from z (the same linear solver)."""
+    def newton_step(self, z, jet, linear_solver):
+        """(n + m,) z (n + m,) less Newton's step from z, where the model's :class:`Jet`
+        is ``jet``: the step that optimistix's Newton takes from z with ``linear_solver``."""
         n = self.y_max.shape[0]
         y, lam = z[:n], z[n:]
         jacobian = jax.vmap(lambda dz: self.tangent(jet, lam, dz[:n], dz[n:]), out_axes=1)(jnp.eye(z.shape[0]))
         residual = self.rows(y, lam, jet.J, jet.v[1:])
-        return z - lx.linear_solve(lx.MatrixLinearOperator(jacobian), residual, LUOrSVD(), throw=False).value
+        return z - lx.linear_solve(lx.MatrixLinearOperator(jacobian), residual, linear_solver, throw=False).value
 
     def __call__(self, z, theta):
         n = self.y_max.shape[0]
@@ -718,9 +718,10 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
     optimistix (see the module docstring). Returns (y, multipliers, residual, aux, result)
     with ``residual`` the largest entry of the KKT (or feasibility) residual and ``aux``
     = (outputs, c) at the polished point; differentiable in theta (implicit). ``jet``:
-    None, or the model's :class:`Jet` at y, already evaluated (the search's), from
-    which a problem with an objective takes Newton's first step before optimistix takes
-    over: one evaluation of the model less (non-finite where there is none)."""
+    None, or the model's :class:`Jet` at y, already evaluated (the search's; NaN where
+    the search accepted no point), from which a problem with an objective takes Newton's
+    first step before optimistix takes over, where optimistix would have evaluated the
+    model at y again."""
     n, n_targets = y.shape[0], len(problem.targets)
     equations = jnp.concatenate([jnp.ones(n_targets, bool), active.limits])
     solver_options = dict(rtol=settings.rtol * 1e-3, atol=settings.rtol * 1e-3, linear_solver=LUOrSVD())
@@ -750,7 +751,7 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
     kkt = _KKT(problem, weight, active, equations, y_max)
     z0 = jnp.concatenate([y, jnp.where(equations, multipliers, 0.0)])
     if jet is not None:
-        z1 = kkt.newton_step(z0, jet)
+        z1 = kkt.newton_step(z0, jet, solver_options["linear_solver"])
         z0 = jnp.where(jnp.all(jnp.isfinite(z1)), z1, z0)
     solution = optx.root_find(
         lambda z, theta: _kkt_residual(z, theta, kkt=kkt), optx.Newton(**solver_options), z0, theta, has_aux=True,
@@ -1006,7 +1007,8 @@ def solve(
             |achieved - value| <= rtol * scale (scale defaults to |value|); limits alike.
         atol: convergence tolerance on steps of the variables scaled to their bound width.
         max_steps: the most model evaluations of the search (line-search trials
-            included), and the most Newton steps of the polish.
+            included), and the most Newton steps of the polish (one more where it
+            starts from the search's jet).
 
     Returns:
         A :class:`DesignResult`: status (a :class:`DesignStatus` name: "successful",

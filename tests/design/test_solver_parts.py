@@ -72,6 +72,11 @@ def test_kkt_residual_derivatives_match_plain_forward_mode():
     dz, dtheta = jnp.linspace(-1.0, 1.0, z.size), jnp.linspace(0.5, -0.5, theta.size)
     np.testing.assert_allclose(jax.jvp(custom, (z, theta), (dz, dtheta))[1], jax.jvp(plain, (z, theta), (dz, dtheta))[1],
                                rtol=1e-13, atol=1e-13)
+    # Newton's first step of the polish, from the model's jet, against numpy's minimum-norm
+    # solve with the plain residual's forward-mode Jacobian (singular at this point).
+    expected = z - np.linalg.pinv(jax.jacfwd(plain)(z, theta), rcond=1e-12) @ plain(z, theta)
+    got = kkt.newton_step(z, solver._jet(problem, z[:2], theta), LUOrSVD())
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
 
 
 def test_polish_returns_the_residual_and_outputs_of_the_point_it_returns():
