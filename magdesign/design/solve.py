@@ -707,7 +707,7 @@ def _last_evaluated(solution):
     evaluated the equations: its answer plus its last step (solution.state.diff, taken
     from that point). Its residual and aux come with the solve, where evaluating them at
     the answer would cost one more evaluation of the model; Newton stops when that step
-    is below its tolerances (far below the design's), and the answer's derivatives are
+    is below its tolerances (a tenth of the design's), and the answer's derivatives are
     those of the root."""
     z = solution.value + jax.lax.stop_gradient(solution.state.diff)
     return z, jnp.max(jnp.abs(solution.state.f), initial=0.0), solution.aux
@@ -724,7 +724,10 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
     model at y again."""
     n, n_targets = y.shape[0], len(problem.targets)
     equations = jnp.concatenate([jnp.ones(n_targets, bool), active.limits])
-    solver_options = dict(rtol=settings.rtol * 1e-3, atol=settings.rtol * 1e-3, linear_solver=LUOrSVD())
+    # Newton stops where its residual and step are a tenth of the design's tolerance: from
+    # the search's point that is one step and one evaluation of the model (with
+    # rtol * 1e-3, a second evaluation confirmed what the first had already met).
+    solver_options = dict(rtol=settings.rtol * 0.1, atol=settings.rtol * 0.1, linear_solver=LUOrSVD())
     adjoint = optx.ImplicitAdjoint(linear_solver=LUOrSVD())
 
     if problem.objective is None:

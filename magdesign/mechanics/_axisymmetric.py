@@ -43,7 +43,8 @@ DOME_ROUNDING_SLACK times it). Two controls: the plate travel held (the natural 
 where the force falls) or the force held (d an unknown, Pi - F d minimised). The path
 followers (:func:`follow_travels`, :func:`first_crossings`) step the plate travel
 adaptively from the undeformed dome with a secant predictor; a force level that a step
-carried is solved from the cubic Hermite interpolant of that step's ends, whose tangents
+carried is solved from the cubic Hermite interpolant between the closest solved states
+around it (the step's ends, or a lighter level solved in the same step), whose tangents
 come from Newton's last Hessian. Their equilibria are differentiated implicitly
 (:func:`implicit`: a custom JVP solving with the same tangent), so derivatives with
 respect to geometry, material, travel and force are exact whatever the iterations did, in
@@ -88,10 +89,12 @@ ARMIJO = 0.25
 # Levenberg shifts tried per iteration at most (each ten times the previous one).
 LEVENBERG_MAX = 12
 # Path following: steps at most, and the Newton iterations below which a step doubles and
-# above which it halves.
+# from which on it halves. (At 16, seed 001's dome kept a first step that took 15
+# iterations, and the next, as long, failed after PATH_NEWTON_MAX_ITER: 142 iterations for
+# its 11 load levels, against 119 at 12.)
 PATH_MAX_STEPS = 80
 PATH_EASY_ITER = 8
-PATH_HARD_ITER = 16
+PATH_HARD_ITER = 12
 # A failed step is retried at a quarter of its length until it is shorter than this
 # fraction of the wall: then the path has met a snap (the equilibrium with the travel held
 # ceases to exist, as where the apex of a thin dome inverts and leaves the plate), and the
@@ -363,16 +366,17 @@ def _factor(mesh, H):
     again only while one of them needs a shift)."""
     diagonal = jnp.abs(jnp.diag(H))
     scale = DOME_LEVENBERG_START * jnp.maximum(diagonal, DOME_LEVENBERG_START * jnp.max(diagonal))
+    parts = _blocks.blocks(mesh.layout, H)
 
     def attempt(carry):
         _, k = carry
-        return _blocks.factor(mesh.layout, H, jnp.where(k == 0, 0.0, scale * 10.0 ** (k - 1))), k + 1
+        return _blocks.factor_blocks(mesh.layout, parts, jnp.where(k == 0, 0.0, scale * 10.0 ** (k - 1))), k + 1
 
     def cond(carry):
         F, k = carry
         return (k == 0) | (~F.finite() & (k <= LEVENBERG_MAX))
 
-    shapes = jax.eval_shape(lambda H: _blocks.factor(mesh.layout, H), H)
+    shapes = jax.eval_shape(lambda parts: _blocks.factor_blocks(mesh.layout, parts), parts)
     untried = jax.tree.map(lambda a: jnp.full(a.shape, jnp.nan, a.dtype), shapes)
     F, _ = lax.while_loop(cond, attempt, (untried, 0))
     return F
@@ -406,26 +410,31 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         return (size > previous / 2) & (size <= DOME_ROUNDING_SLACK * tol)
 
     def cond(carry):
-        _, _, _, size, it, stopped = carry
+        _, _, _, _, size, it, stopped = carry
         return (it < max_iter) & (size > tol) & ~stopped
 
     def body(carry):
-        y, g, H, previous, it, _ = carry
+        # pi0: the potential at y, carried from the line search that reached y
+        y, pi0, g, H, previous, it, _ = carry
         dy = _blocks.solve(mesh.layout, _factor(mesh, _restricted(H, mask)), g)
-        pi0, slope = energy(y), jnp.dot(g, dy)
+        slope = jnp.dot(g, dy)
         resolved = slope > DOME_ENERGY_RESOLUTION * jnp.abs(pi0)
 
-        def search_cond(alpha):
-            trial = energy(y - alpha * dy)
+        def search_cond(search):
+            alpha, trial = search
             return resolved & (trial > pi0 - ARMIJO * alpha * slope) & (alpha > 2.0**-LINE_SEARCH_MAX)
 
-        alpha = lax.while_loop(search_cond, lambda a: a / 2, 1.0)
+        def shorter(search):
+            alpha = search[0] / 2
+            return alpha, energy(y - alpha * dy)
+
+        alpha, pi = lax.while_loop(search_cond, shorter, (1.0, energy(y - dy)))
         y = y - alpha * dy
         g, H, size = linearise(y)
-        return y, g, H, size, it + 1, (alpha <= 2.0**-LINE_SEARCH_MAX) | on_floor(size, previous)
+        return y, pi, g, H, size, it + 1, (alpha <= 2.0**-LINE_SEARCH_MAX) | on_floor(size, previous)
 
     g, H, size = linearise(y0)
-    y, _, H, size, iterations, stopped = lax.while_loop(cond, body, (y0, g, H, size, 0, False))
+    y, _, _, H, size, iterations, stopped = lax.while_loop(cond, body, (y0, energy(y0), g, H, size, 0, False))
     return y, (size <= tol) | (stopped & (size <= DOME_ROUNDING_SLACK * tol)), iterations, H
 
 
@@ -547,16 +556,16 @@ def _path_guess(path, goal, thickness):
     return guess, d_new, max_iter, jump
 
 
-def _path_update(mesh, params, path, y_new, H_new, ok, iterations, jump):
+def _path_update(mesh, params, path, y_new, tangent_new, ok, iterations, jump):
     """The path after Newton's answer to :func:`_path_guess`: a converged step is taken
     (the next step doubles if it was easy, halves if it was hard; after a jump the secant
-    starts afresh); a failed one is refused and the step cut to a quarter. ``H_new``:
-    the Hessian at ``y_new``, for the new tangent; None keeps the path's tangent (a path
-    whose tangents are not read)."""
+    starts afresh); a failed one is refused and the step cut to a quarter.
+    ``tangent_new``: (dy/dd, dF/dd) at ``y_new`` (:func:`_tangent`); None keeps the
+    path's tangent (a path whose tangents are not read)."""
     factor = jnp.where(iterations <= PATH_EASY_ITER, 2.0, jnp.where(iterations >= PATH_HARD_ITER, 0.5, 1.0))
     step = jnp.where(ok, jnp.maximum(path.step, SNAP_STEP * params[1]) * factor, path.step / 4)
-    tangent, stiffness = (path.tangent, path.stiffness) if H_new is None else lax.cond(
-        ok, lambda: _tangent(mesh, H_new), lambda: (path.tangent, path.stiffness)
+    tangent, stiffness = (path.tangent, path.stiffness) if tangent_new is None else jax.tree.map(
+        lambda new, old: jnp.where(ok, new, old), tangent_new, (path.tangent, path.stiffness)
     )
     return Path(
         y=jnp.where(ok, y_new, path.y),
@@ -637,7 +646,8 @@ def first_crossings(mesh, params, levels, max_travel, step):
     ``max_travel`` (m). Each loop turn makes one Newton solve: a step of the path with the
     travel held, or, once a step has carried a level, that level's solve with the force
     held, from the cubic Hermite interpolant of the step's two ends (their states,
-    forces and tangents along the path); so one compiled Newton serves both. Not
+    forces and tangents along the path), the lower end moving up to each level solved
+    below the next; so one compiled Newton serves both. Not
     differentiated (see :func:`implicit`)."""
     k = levels.shape[0]
     blank = jnp.zeros((k, mesh.size))
@@ -659,6 +669,7 @@ def first_crossings(mesh, params, levels, max_travel, step):
         max_iter = jnp.where(solving, NEWTON_MAX_ITER, max_iter)
         mask, held, force = _control(mesh, solving, jnp.where(solving, levels[level], d_new))
         y, ok, iterations, H = newton(mesh, mask, held, force, params, guess, max_iter)
+        tangent = lax.cond(ok, lambda: _tangent(mesh, H), lambda: (path.tangent, path.stiffness))
 
         just = jnp.arange(k) == level
         c = eqx.tree_at(
@@ -666,10 +677,19 @@ def first_crossings(mesh, params, levels, max_travel, step):
             c,
             (on_level(just & solving, jnp.broadcast_to(y, blank.shape), c.states), jnp.where(just & solving, ok, c.converged)),
         )
-        new = _path_update(mesh, params, path, y, H, ok & ~solving, iterations, jump)
+        new = _path_update(mesh, params, path, y, tangent, ok & ~solving, iterations, jump)
         new = jax.tree.map(lambda a, b: jnp.where(solving, b, a), new, path)
         crossed = ~solving & ok & ~found & (new.force >= levels)
         before = jax.tree.map(lambda a, b: jnp.where(jnp.any(crossed), a, b), path, before)
+        # A solved level's state, inside the step, is a closer lower end for the levels
+        # still pending above it: their Hermite guesses span less of the step (on seed
+        # 001's dome the lightest levels took 12 iterations each from the whole first step).
+        above = jnp.all(jnp.where(pending & ~just, levels >= levels[level], True))
+        closer = solving & ok & above & (y[-1] > before.y[-1]) & (y[-1] < path.y[-1])
+        solved_point = eqx.tree_at(
+            lambda p: (p.y, p.force, p.tangent, p.stiffness), before, (y, plate_force(mesh, y, params), *tangent)
+        )
+        before = jax.tree.map(lambda a, b: jnp.where(closer, a, b), solved_point, before)
         return new, before, found | crossed, solved | (just & solving), c
 
     none = jnp.zeros(k, bool)
