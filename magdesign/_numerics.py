@@ -64,8 +64,8 @@ def safe_log(x, at_zero=0.0):
 # Thresholds of the design solver (magdesign.design.solve). All act on dimensionless
 # quantities: variables scaled to their bound width, residuals scaled by their target.
 # Default tolerance on scaled target and limit residuals: 1e-10 leaves a margin of 10 below
-# the 1e-9 relative accuracy the designs are checked to, and far above the 1e-15 that the
-# final Newton polish reaches.
+# the 1e-9 relative accuracy the designs are checked to; the final Newton polish stops
+# at a tenth of it (its quadratic convergence usually takes it to rounding).
 DESIGN_RTOL = 1e-10
 # Default step tolerance in scaled variables: a converged step in a [0, 1] box.
 DESIGN_ATOL = 1e-13

@@ -28,7 +28,7 @@ to its target or limit. It has two stages:
    This stage is ours because it chooses the active set, which no JAX library does:
    optimistix's solvers take no constraints or bounds, and jaxopt's bounded QP (BoxOSQP)
    is too inexact for it (measured in benchmarks/design.py).
-2. exact polish (optimistix): with the active set of the last subproblem, the KKT system
+2. polish (optimistix, to a tenth of the tolerance): with the active set of the last subproblem, the KKT system
    (stationarity on the free variables, targets and active limits as equations, active
    bounds as fixed variables) is solved by ``optimistix.root_find`` (Newton, from the
    point of Newton's first step, which is taken from the search's last jet, so that the
@@ -724,9 +724,10 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
     model at y again."""
     n, n_targets = y.shape[0], len(problem.targets)
     equations = jnp.concatenate([jnp.ones(n_targets, bool), active.limits])
-    # Newton stops where its residual and step are a tenth of the design's tolerance: from
-    # the search's point that is one step and one evaluation of the model (with
-    # rtol * 1e-3, a second evaluation confirmed what the first had already met).
+    # Newton stops where its residual is below a tenth of the design's tolerance and its
+    # step below that relative to (1 + |z|): from the search's point typically one step
+    # and one evaluation of the model (at rtol * 1e-3, a second evaluation confirmed that
+    # the first had already met the design's tolerance, on the default design).
     solver_options = dict(rtol=settings.rtol * 0.1, atol=settings.rtol * 0.1, linear_solver=LUOrSVD())
     adjoint = optx.ImplicitAdjoint(linear_solver=LUOrSVD())
 

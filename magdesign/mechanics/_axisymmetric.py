@@ -43,9 +43,9 @@ DOME_ROUNDING_SLACK times it). Two controls: the plate travel held (the natural 
 where the force falls) or the force held (d an unknown, Pi - F d minimised). The path
 followers (:func:`follow_travels`, :func:`first_crossings`) step the plate travel
 adaptively from the undeformed dome with a secant predictor; a force level that a step
-carried is solved from the cubic Hermite interpolant between the closest solved states
-around it (the step's ends, or a lighter level solved in the same step), whose tangents
-come from Newton's last Hessian. Their equilibria are differentiated implicitly
+carried is solved from the cubic Hermite interpolant from the step's start (or a lighter
+level already solved in that step) to the step's end, whose tangents come from Newton's
+last Hessian. Their equilibria are differentiated implicitly
 (:func:`implicit`: a custom JVP solving with the same tangent), so derivatives with
 respect to geometry, material, travel and force are exact whatever the iterations did, in
 forward and reverse mode and to any order.
@@ -88,8 +88,8 @@ LINE_SEARCH_MAX = 30
 ARMIJO = 0.25
 # Levenberg shifts tried per iteration at most (each ten times the previous one).
 LEVENBERG_MAX = 12
-# Path following: steps at most, and the Newton iterations below which a step doubles and
-# from which on it halves. (At 16, seed 001's dome kept a first step that took 15
+# Path following: steps at most, and the Newton iterations at or below which a step doubles
+# and from which on it halves. (At 16, seed 001's dome kept a first step that took 15
 # iterations, and the next, as long, failed after PATH_NEWTON_MAX_ITER: 142 iterations for
 # its 11 load levels, against 119 at 12.)
 PATH_MAX_STEPS = 80
@@ -669,9 +669,15 @@ def first_crossings(mesh, params, levels, max_travel, step):
         max_iter = jnp.where(solving, NEWTON_MAX_ITER, max_iter)
         mask, held, force = _control(mesh, solving, jnp.where(solving, levels[level], d_new))
         y, ok, iterations, H = newton(mesh, mask, held, force, params, guess, max_iter)
-        tangent = lax.cond(ok, lambda: _tangent(mesh, H), lambda: (path.tangent, path.stiffness))
-
         just = jnp.arange(k) == level
+        # A solved level's state, inside the step, is a closer lower end for the levels
+        # still pending above it: their Hermite guesses span less of the step (on seed
+        # 001's dome the lightest levels took 12 iterations each from the whole first step).
+        still = pending & ~just
+        above = jnp.all(jnp.where(still, levels >= levels[level], True))
+        closer = solving & ok & jnp.any(still) & above & (y[-1] > before.y[-1]) & (y[-1] < path.y[-1])
+        tangent = lax.cond(ok & (~solving | closer), lambda: _tangent(mesh, H), lambda: (path.tangent, path.stiffness))
+
         c = eqx.tree_at(
             lambda c: (c.states, c.converged),
             c,
@@ -681,11 +687,6 @@ def first_crossings(mesh, params, levels, max_travel, step):
         new = jax.tree.map(lambda a, b: jnp.where(solving, b, a), new, path)
         crossed = ~solving & ok & ~found & (new.force >= levels)
         before = jax.tree.map(lambda a, b: jnp.where(jnp.any(crossed), a, b), path, before)
-        # A solved level's state, inside the step, is a closer lower end for the levels
-        # still pending above it: their Hermite guesses span less of the step (on seed
-        # 001's dome the lightest levels took 12 iterations each from the whole first step).
-        above = jnp.all(jnp.where(pending & ~just, levels >= levels[level], True))
-        closer = solving & ok & above & (y[-1] > before.y[-1]) & (y[-1] < path.y[-1])
         solved_point = eqx.tree_at(
             lambda p: (p.y, p.force, p.tangent, p.stiffness), before, (y, plate_force(mesh, y, params), *tangent)
         )

@@ -280,6 +280,17 @@ def test_a_light_level_beside_a_heavy_one_is_solved_as_alone():
     assert float(both[1]) == pytest.approx(float(alone), rel=1e-6)
 
 
+def test_increasing_levels_crossed_in_one_step_are_solved_as_alone():
+    """Seed 001's dome under the default design's 11 load levels and a repeated one: the
+    first path step carries the five lightest, each of which starts the next one's guess
+    (first_crossings); every level's travel must be the one it has when solved alone."""
+    forces = np.append(np.linspace(0.0, 5.0, 11), 2.0)
+    args = dict(outer_radius=SEED[0], thickness=SEED[1], material=RESIN)
+    together = dome_compliance(max_force=np.sort(forces), **args)
+    for force, value in zip(np.sort(forces), together):
+        assert float(value) == pytest.approx(float(dome_compliance(max_force=force, **args)), rel=1e-6)
+
+
 def test_penalty_contact_leaves_a_negligible_penetration():
     mesh = _axisymmetric.Mesh(*DEFAULT_MESH, "bonded")
 
