@@ -345,12 +345,6 @@ def contact_radius(mesh, y, params):
     return jnp.max(jnp.where(touching, r, 0.0))
 
 
-def residual(mesh, mask, held, force, y, params):
-    """dPi/dy - force e_d on the unknowns (mask 1); y - held on the held values (mask 0)."""
-    gradient = jax.grad(potential, argnums=1)(mesh, y, params)
-    return mask * (gradient - force * _unit_last(mesh)) + (1 - mask) * (y - held)
-
-
 def _unit_last(mesh):
     return np.append(np.zeros(mesh.n_dof), 1.0)
 
@@ -389,7 +383,8 @@ def _tolerance(params):
 
 def newton(mesh, mask, held, force, params, y0, max_iter):
     """Minimise Pi - force d over the unknowns (mask 1) from y0, the others held at
-    ``held``: (state, converged, iterations, the Hessian of the potential at the state).
+    ``held``: (state, converged, iterations, the Hessian of the potential at the state,
+    the plate force at the state (N): the reaction dPi/dd, read off the gradient).
     Converged: the largest entry of the residual (an out-of-balance force, N) is at most
     :func:`_tolerance`, or at most DOME_ROUNDING_SLACK times it where a Newton step no
     longer halves it (float64's floor, see magdesign._numerics)."""
@@ -401,41 +396,58 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         value = potential(mesh, y, params, force)
         return jnp.where(jnp.isfinite(value), value, jnp.inf)
 
-    def linearise(y):
-        g, H = derivatives(mesh, y, params)
-        g = mask * (g - force * unit)
-        return g, H, jnp.max(jnp.abs(g))
-
     def on_floor(size, previous):
         return (size > previous / 2) & (size <= DOME_ROUNDING_SLACK * tol)
 
-    def cond(carry):
-        _, _, _, _, size, it, stopped = carry
-        return (it < max_iter) & (size > tol) & ~stopped
-
-    def body(carry):
-        # pi0: the potential at y, carried from the line search that reached y
-        y, pi0, g, H, previous, it, _ = carry
+    def step(y, pi0, g, H):
+        """(y less Newton's step for the gradient g and Hessian H, cut back until Armijo's
+        test holds, the potential there, whether the search gave up); pi0 the potential at
+        y, NaN where not yet evaluated."""
         dy = _blocks.solve(mesh.layout, _factor(mesh, _restricted(H, mask)), g)
         slope = jnp.dot(g, dy)
-        resolved = slope > DOME_ENERGY_RESOLUTION * jnp.abs(pi0)
+
+        # The potential at alpha = 2^-k for k = -1 (y itself, where pi0 is not yet known),
+        # 0 (the full step, whatever the test), 1, 2, ... while Armijo's test fails: one
+        # evaluation of the potential in the compiled loop.
+        def alpha_of(k):
+            return jnp.where(k < 0, 0.0, 2.0 ** -k.astype(float))
 
         def search_cond(search):
-            alpha, trial = search
-            return resolved & (trial > pi0 - ARMIJO * alpha * slope) & (alpha > 2.0**-LINE_SEARCH_MAX)
+            k, trial, pi0 = search
+            resolved = slope > DOME_ENERGY_RESOLUTION * jnp.abs(pi0)
+            alpha = alpha_of(k)
+            return (k < 0) | (resolved & (trial > pi0 - ARMIJO * alpha * slope) & (alpha > 2.0**-LINE_SEARCH_MAX))
 
         def shorter(search):
-            alpha = search[0] / 2
-            return alpha, energy(y - alpha * dy)
+            k, trial, pi0 = search
+            k = k + 1
+            value = energy(y - alpha_of(k) * dy)
+            return k, jnp.where(k < 0, trial, value), jnp.where(k < 0, value, pi0)
 
-        alpha, pi = lax.while_loop(search_cond, shorter, (1.0, energy(y - dy)))
-        y = y - alpha * dy
-        g, H, size = linearise(y)
-        return y, pi, g, H, size, it + 1, (alpha <= 2.0**-LINE_SEARCH_MAX) | on_floor(size, previous)
+        start = (jnp.where(jnp.isnan(pi0), -2, -1), jnp.inf, pi0)
+        k, pi, _ = lax.while_loop(search_cond, shorter, start)
+        alpha = alpha_of(k)
+        return y - alpha * dy, pi, alpha <= 2.0**-LINE_SEARCH_MAX
 
-    g, H, size = linearise(y0)
-    y, _, _, H, size, iterations, stopped = lax.while_loop(cond, body, (y0, energy(y0), g, H, size, 0, False))
-    return y, (size <= tol) | (stopped & (size <= DOME_ROUNDING_SLACK * tol)), iterations, H
+    # Each turn linearises at y, then steps unless y is where the solve ends: one
+    # evaluation of the derivatives in the compiled loop (as many evaluations as with one
+    # before the loop and one after each step). pi0: the potential at y, carried from the
+    # line search that reached y (NaN at y0, where the first search evaluates it).
+    def body(carry):
+        y, pi0, previous, it, gave_up, _ = carry
+        g, H = derivatives(mesh, y, params)
+        reaction = g[-1]
+        g = mask * (g - force * unit)
+        size = jnp.max(jnp.abs(g))
+        stopped = gave_up | on_floor(size, previous)
+        done = (size <= tol) | (it >= max_iter) | stopped
+        y, pi, gave_up = lax.cond(done, lambda: (y, pi0, gave_up), lambda: step(y, pi0, g, H))
+        return y, pi, size, it + jnp.where(done, 0, 1), gave_up, (done, stopped, H, reaction)
+
+    unset = (False, False, jnp.zeros((mesh.size, mesh.size)), jnp.zeros(()))
+    carry = (y0, jnp.nan, jnp.inf, 0, False, unset)
+    y, _, size, iterations, _, (_, stopped, H, reaction) = lax.while_loop(lambda c: ~c[-1][0], body, carry)
+    return y, (size <= tol) | (stopped & (size <= DOME_ROUNDING_SLACK * tol)), iterations, H, reaction
 
 
 def _restricted(H, mask):
@@ -471,12 +483,13 @@ def _implicit_jvp(mesh, control, primals, tangents):
     states = implicit(mesh, control, params, values, states)
 
     def state_tangent(y, value, value_dot):
-        def r(p, v):
-            return residual(mesh, *_control(mesh, force_control, v), y, p)
-
-        _, r_dot = jax.jvp(r, (params, value), (params_dot, value_dot))
+        # The residual, mask (dPi/dy - force e_d) + (1 - mask)(y - held), moves with params
+        # through the gradient and with the held travel or force along e_d (-value_dot,
+        # either way). The gradient's tangent from derivatives' own jvp: one traced function
+        # for it and H (grad(potential)'s took as long to trace as the rest of the rule).
+        (_, H), (g_dot, _) = jax.jvp(lambda p: derivatives(mesh, y, p), (params,), (params_dot,))
         mask = _control(mesh, force_control, value)[0]
-        _, H = derivatives(mesh, y, params)
+        r_dot = mask * g_dot - value_dot * _unit_last(mesh)
         # only the solve's matvec is differentiated (custom_linear_solve): a factor with
         # tangents would cost second derivatives a Cholesky derivative per direction
         F = _factor(mesh, lax.stop_gradient(_restricted(H, mask)))
@@ -528,14 +541,13 @@ def _tangent(mesh, H):
     return tangent, H[-1] @ tangent
 
 
-def _start_path(mesh, params, step, tangents=True):
+def _start_path(mesh, step):
     """The undeformed dome as the start of a path, with first travel step ``step`` (m);
-    its tangent zero unless ``tangents`` (a path whose tangents are read)."""
+    its tangent not yet worked out (zero, stiffness NaN: see :func:`first_crossings`)."""
     zero = jnp.zeros(mesh.size)
-    tangent, stiffness = _tangent(mesh, derivatives(mesh, zero, params)[1]) if tangents else (zero, jnp.zeros(()))
     return Path(
-        zero, jnp.zeros(()), tangent, stiffness, zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False),
-        jnp.asarray(False),
+        zero, jnp.zeros(()), zero, jnp.asarray(jnp.nan), zero, jnp.asarray(step, float), jnp.asarray(0),
+        jnp.asarray(False), jnp.asarray(False),
     )
 
 
@@ -556,12 +568,13 @@ def _path_guess(path, goal, thickness):
     return guess, d_new, max_iter, jump
 
 
-def _path_update(mesh, params, path, y_new, tangent_new, ok, iterations, jump):
+def _path_update(params, path, y_new, force_new, tangent_new, ok, iterations, jump):
     """The path after Newton's answer to :func:`_path_guess`: a converged step is taken
     (the next step doubles if it was easy, halves if it was hard; after a jump the secant
     starts afresh); a failed one is refused and the step cut to a quarter.
-    ``tangent_new``: (dy/dd, dF/dd) at ``y_new`` (:func:`_tangent`); None keeps the
-    path's tangent (a path whose tangents are not read)."""
+    ``force_new``: the plate force (N) at ``y_new``; ``tangent_new``: (dy/dd, dF/dd) at
+    ``y_new`` (:func:`_tangent`), or None, which keeps the path's tangent (a path whose
+    tangents are not read)."""
     factor = jnp.where(iterations <= PATH_EASY_ITER, 2.0, jnp.where(iterations >= PATH_HARD_ITER, 0.5, 1.0))
     step = jnp.where(ok, jnp.maximum(path.step, SNAP_STEP * params[1]) * factor, path.step / 4)
     tangent, stiffness = (path.tangent, path.stiffness) if tangent_new is None else jax.tree.map(
@@ -569,7 +582,7 @@ def _path_update(mesh, params, path, y_new, tangent_new, ok, iterations, jump):
     )
     return Path(
         y=jnp.where(ok, y_new, path.y),
-        force=jnp.where(ok, plate_force(mesh, y_new, params), path.force),
+        force=jnp.where(ok, force_new, path.force),
         tangent=tangent,
         stiffness=stiffness,
         previous=jnp.where(ok, jnp.where(jump, y_new, path.y), path.previous),
@@ -613,15 +626,15 @@ def follow_travels(mesh, params, travels, step):
     def advance(path, goal):
         guess, d_new, max_iter, jump = _path_guess(path, goal, params[1])
         mask, held, force = _control(mesh, False, d_new)
-        y, ok, iterations, _ = newton(mesh, mask, held, force, params, guess, max_iter)
-        return _path_update(mesh, params, path, y, None, ok, iterations, jump)
+        y, ok, iterations, _, reaction = newton(mesh, mask, held, force, params, guess, max_iter)
+        return _path_update(params, path, y, reaction, None, ok, iterations, jump)
 
     def to(path, goal):
         path = eqx.tree_at(lambda p: p.count, path, jnp.asarray(0))
         path = lax.while_loop(lambda p: (p.y[-1] < goal) & p.can_go_on(jnp.inf), lambda p: advance(p, goal), path)
         return path, (path.y, path.y[-1] >= goal, path.failed)
 
-    _, (states, reached, failed) = lax.scan(to, _start_path(mesh, params, step, tangents=False), travels)
+    _, (states, reached, failed) = lax.scan(to, _start_path(mesh, step), travels)
     return states, reached, failed
 
 
@@ -661,14 +674,18 @@ def first_crossings(mesh, params, levels, max_travel, step):
         # The path does not move while levels it crossed are pending: they all lie
         # between ``before`` and ``path``.
         path, before, found, solved, c = carry
+        # The first turn works out the undeformed dome's tangent: its linearisation at
+        # travel 0, no Newton step (so the compiled loop holds the one linearisation).
+        starting = jnp.isnan(path.stiffness)
         pending = found & ~solved
         level = jnp.argmax(pending)
         solving = pending[level]
         guess, d_new, max_iter, jump = _path_guess(path, max_travel, params[1])
         guess = jnp.where(solving, _hermite_guess(before, path, levels[level]), guess)
-        max_iter = jnp.where(solving, NEWTON_MAX_ITER, max_iter)
+        max_iter = jnp.where(solving, NEWTON_MAX_ITER, jnp.where(starting, 0, max_iter))
+        d_new = jnp.where(starting, 0.0, d_new)
         mask, held, force = _control(mesh, solving, jnp.where(solving, levels[level], d_new))
-        y, ok, iterations, H = newton(mesh, mask, held, force, params, guess, max_iter)
+        y, ok, iterations, H, reaction = newton(mesh, mask, held, force, params, guess, max_iter)
         just = jnp.arange(k) == level
         # A solved level's state, inside the step, is a closer lower end for the levels
         # still pending above it: their Hermite guesses span less of the step (on seed
@@ -676,26 +693,30 @@ def first_crossings(mesh, params, levels, max_travel, step):
         still = pending & ~just
         above = jnp.all(jnp.where(still, levels >= levels[level], True))
         closer = solving & ok & jnp.any(still) & above & (y[-1] > before.y[-1]) & (y[-1] < path.y[-1])
-        tangent = lax.cond(ok & (~solving | closer), lambda: _tangent(mesh, H), lambda: (path.tangent, path.stiffness))
+        tangent = lax.cond(
+            starting | (ok & (~solving | closer)), lambda: _tangent(mesh, H), lambda: (path.tangent, path.stiffness)
+        )
 
         c = eqx.tree_at(
             lambda c: (c.states, c.converged),
             c,
             (on_level(just & solving, jnp.broadcast_to(y, blank.shape), c.states), jnp.where(just & solving, ok, c.converged)),
         )
-        new = _path_update(mesh, params, path, y, tangent, ok & ~solving, iterations, jump)
+        new = _path_update(params, path, y, reaction, tangent, ok & ~solving, iterations, jump)
         new = jax.tree.map(lambda a, b: jnp.where(solving, b, a), new, path)
-        crossed = ~solving & ok & ~found & (new.force >= levels)
+        started = eqx.tree_at(lambda p: (p.tangent, p.stiffness), path, tangent)
+        new = jax.tree.map(lambda a, b: jnp.where(starting, a, b), started, new)
+        crossed = ~starting & ~solving & ok & ~found & (new.force >= levels)
         before = jax.tree.map(lambda a, b: jnp.where(jnp.any(crossed), a, b), path, before)
         solved_point = eqx.tree_at(
-            lambda p: (p.y, p.force, p.tangent, p.stiffness), before, (y, plate_force(mesh, y, params), *tangent)
+            lambda p: (p.y, p.force, p.tangent, p.stiffness), before, (y, reaction, *tangent)
         )
         before = jax.tree.map(lambda a, b: jnp.where(closer, a, b), solved_point, before)
         return new, before, found | crossed, solved | (just & solving), c
 
     none = jnp.zeros(k, bool)
     c = Crossings(blank, levels, none, none, jnp.asarray(False), jnp.asarray(False))
-    start = _start_path(mesh, params, step)
+    start = _start_path(mesh, step)
     path, _, found, _, c = lax.while_loop(cond, body, (start, start, none, none, c))
     return Crossings(
         states=on_level(found, c.states, jnp.broadcast_to(path.y, blank.shape)),

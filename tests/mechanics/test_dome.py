@@ -190,16 +190,21 @@ def test_axisymmetric_gradients_equal_central_differences():
         assert float(g) == pytest.approx(_central_difference(compliance, args, i), rel=1e-5)
 
 
-def test_axisymmetric_second_derivative_equals_differences_of_the_first():
+def test_axisymmetric_second_derivatives_equal_differences_of_the_first():
     # forward over forward, as the design solver's Hessians take it: the implicit JVP
-    # differentiated once more
-    def c(t):
-        return dome_compliance(outer_radius=8e-3, thickness=t, material=RESIN, max_force=5.0)
+    # differentiated once more, in the thickness and the radius (mixed: a sweep over the
+    # radius differentiates the design in both)
+    def c(radius, thickness):
+        return dome_compliance(outer_radius=radius, thickness=thickness, material=RESIN, max_force=5.0)
 
-    first = jax.jit(jax.jacfwd(c))
-    second = float(jax.jit(jax.jacfwd(jax.jacfwd(c)))(2e-3))
-    assert np.isfinite(second)
-    assert second == pytest.approx(_central_difference(first, (2e-3,), 0, 1e-4), rel=1e-5)
+    args = (8e-3, 2e-3)
+    first = jax.jit(jax.jacfwd(c, argnums=(0, 1)))
+    second = np.array(jax.jit(jax.jacfwd(jax.jacfwd(c, argnums=(0, 1)), argnums=(0, 1)))(*args))
+    assert np.all(np.isfinite(second))
+    for j in range(2):
+        for i in range(2):
+            difference = _central_difference(lambda *a: first(*a)[j], args, i, 1e-4)
+            assert second[j, i] == pytest.approx(difference, rel=1e-5)
 
 
 def test_axisymmetric_is_finite_for_thick_walls_and_at_zero_force():
