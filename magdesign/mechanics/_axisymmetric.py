@@ -410,7 +410,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         # 0 (the full step, whatever the test), 1, 2, ... while Armijo's test fails: one
         # evaluation of the potential in the compiled loop.
         def alpha_of(k):
-            return jnp.where(k < 0, 0.0, 2.0 ** -k.astype(float))
+            return jnp.where(k < 0, 0.0, jnp.ldexp(1.0, -jnp.maximum(k, 0)))
 
         def search_cond(search):
             k, trial, pi0 = search
@@ -421,7 +421,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         def shorter(search):
             k, trial, pi0 = search
             k = k + 1
-            value = energy(y - alpha_of(k) * dy)
+            value = energy(jnp.where(k < 0, y, y - alpha_of(k) * dy))
             return k, jnp.where(k < 0, trial, value), jnp.where(k < 0, value, pi0)
 
         start = (jnp.where(jnp.isnan(pi0), -2, -1), jnp.inf, pi0)
@@ -440,7 +440,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         g = mask * (g - force * unit)
         size = jnp.max(jnp.abs(g))
         stopped = gave_up | on_floor(size, previous)
-        done = (size <= tol) | (it >= max_iter) | stopped
+        done = ~(size > tol) | (it >= max_iter) | stopped  # a NaN residual stops it too
         y, pi, gave_up = lax.cond(done, lambda: (y, pi0, gave_up), lambda: step(y, pi0, g, H))
         return y, pi, size, it + jnp.where(done, 0, 1), gave_up, (done, stopped, H, reaction)
 
@@ -543,11 +543,11 @@ def _tangent(mesh, H):
 
 def _start_path(mesh, step):
     """The undeformed dome as the start of a path, with first travel step ``step`` (m);
-    its tangent not yet worked out (zero, stiffness NaN: see :func:`first_crossings`)."""
+    its tangent and stiffness zero, not worked out (see :func:`first_crossings`)."""
     zero = jnp.zeros(mesh.size)
     return Path(
-        zero, jnp.zeros(()), zero, jnp.asarray(jnp.nan), zero, jnp.asarray(step, float), jnp.asarray(0),
-        jnp.asarray(False), jnp.asarray(False),
+        zero, jnp.zeros(()), zero, jnp.zeros(()), zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False),
+        jnp.asarray(False),
     )
 
 
@@ -656,27 +656,28 @@ class Crossings(eqx.Module):
 def first_crossings(mesh, params, levels, max_travel, step):
     """The equilibria at the first crossing of each of ``levels`` (k,) (N, > 0) on the path
     followed from the undeformed dome (first step ``step``, m) up to the travel
-    ``max_travel`` (m). Each loop turn makes one Newton solve: a step of the path with the
-    travel held, or, once a step has carried a level, that level's solve with the force
-    held, from the cubic Hermite interpolant of the step's two ends (their states,
-    forces and tangents along the path), the lower end moving up to each level solved
-    below the next; so one compiled Newton serves both. Not
-    differentiated (see :func:`implicit`)."""
+    ``max_travel`` (m). The first loop turn linearises the undeformed dome for its tangent
+    (a Newton call with no step, not a step of the path); each later turn makes one Newton
+    solve: a step of the path with the travel held, or, once a step has carried a level,
+    that level's solve with the force held, from the cubic Hermite interpolant of the
+    step's two ends (their states, forces and tangents along the path), the lower end
+    moving up to each level solved below the next; so one compiled Newton serves all
+    three. Not differentiated (see :func:`implicit`)."""
     k = levels.shape[0]
     blank = jnp.zeros((k, mesh.size))
     on_level = lambda mask, now, old: jnp.where(mask.reshape((k,) + (1,) * (now.ndim - 1)), now, old)  # noqa: E731
 
     def cond(carry):
-        path, _, found, solved, _ = carry
+        path, _, found, solved, _, _ = carry
         return jnp.any(found & ~solved) | (~jnp.all(found) & path.can_go_on(max_travel))
 
     def body(carry):
         # The path does not move while levels it crossed are pending: they all lie
         # between ``before`` and ``path``.
-        path, before, found, solved, c = carry
+        path, before, found, solved, c, started = carry
         # The first turn works out the undeformed dome's tangent: its linearisation at
         # travel 0, no Newton step (so the compiled loop holds the one linearisation).
-        starting = jnp.isnan(path.stiffness)
+        starting = ~started
         pending = found & ~solved
         level = jnp.argmax(pending)
         solving = pending[level]
@@ -712,12 +713,12 @@ def first_crossings(mesh, params, levels, max_travel, step):
             lambda p: (p.y, p.force, p.tangent, p.stiffness), before, (y, reaction, *tangent)
         )
         before = jax.tree.map(lambda a, b: jnp.where(closer, a, b), solved_point, before)
-        return new, before, found | crossed, solved | (just & solving), c
+        return new, before, found | crossed, solved | (just & solving), c, jnp.asarray(True)
 
     none = jnp.zeros(k, bool)
     c = Crossings(blank, levels, none, none, jnp.asarray(False), jnp.asarray(False))
     start = _start_path(mesh, step)
-    path, _, found, _, c = lax.while_loop(cond, body, (start, start, none, none, c))
+    path, _, found, _, c, _ = lax.while_loop(cond, body, (start, start, none, none, c, jnp.asarray(False)))
     return Crossings(
         states=on_level(found, c.states, jnp.broadcast_to(path.y, blank.shape)),
         forces=jnp.where(found, levels, path.force),
