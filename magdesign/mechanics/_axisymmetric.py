@@ -705,8 +705,8 @@ def first_crossings(mesh, params, levels, max_travel, step):
         )
         new = _path_update(params, path, y, reaction, tangent, ok & ~solving, iterations, jump)
         new = jax.tree.map(lambda a, b: jnp.where(solving, b, a), new, path)
-        started = eqx.tree_at(lambda p: (p.tangent, p.stiffness), path, tangent)
-        new = jax.tree.map(lambda a, b: jnp.where(starting, a, b), started, new)
+        with_tangent = eqx.tree_at(lambda p: (p.tangent, p.stiffness), path, tangent)
+        new = jax.tree.map(lambda a, b: jnp.where(starting, a, b), with_tangent, new)
         crossed = ~starting & ~solving & ok & ~found & (new.force >= levels)
         before = jax.tree.map(lambda a, b: jnp.where(jnp.any(crossed), a, b), path, before)
         solved_point = eqx.tree_at(

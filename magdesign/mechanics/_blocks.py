@@ -114,8 +114,8 @@ def factor_blocks(layout: Layout, parts: Blocks, shift=0.0) -> Factor:
     def inverted_factor(D):
         return jsl.solve_triangular(jnp.linalg.cholesky(D), eye, lower=True)
 
-    def step(Li, blocks):
-        D, E = blocks
+    def step(Li, pair):
+        D, E = pair
         C = E @ Li.T  # E L^-T: the factor's block under the diagonal
         Li = inverted_factor(D - C @ C.T)
         return Li, (Li, C)
