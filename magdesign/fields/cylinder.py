@@ -53,7 +53,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from magdesign._numerics import double_where, float_array, safe_sqrt
+from magdesign._numerics import float_array, safe_sqrt
 from magdesign._validation import check_last_axis, check_positive
 from magdesign.fields._special import (
     AXIS_SERIES_S,
@@ -763,20 +763,19 @@ def cylinder_on_axis(
     Returns:
         B_z (T), shape of ``z``. With u = D + z, v = z and s_u, s_v the two roots, the
         bracket is evaluated as R^2 D (u + v) / (s_u s_v (u s_v + v s_u)) where u, v have
-        the same sign (no cancellation at any distance), and as written where they differ.
+        the same sign (no cancellation at any distance), and as (u s_v - v s_u) / (s_u s_v)
+        where they differ (a sum of two positive terms).
     """
     check_positive(radius=radius, height=height, unit="m")
     z = float_array(z)
     u = height + z
     s_u = jnp.sqrt(radius**2 + u * u)
     s_v = jnp.sqrt(radius**2 + z * z)
+    # The bracket is (u s_v - v s_u) / (s_u s_v); where u and v have the same sign its
+    # numerator is R^2 D (u + v) / (u s_v + v s_u), whose denominator can vanish only where
+    # they differ (at the centre, z = -D/2), so each form is taken where it is exact.
+    a, b = u * s_v, z * s_u
     opposite = u * z < 0.0
-    direct = u / s_u - z / s_v
-    # Where u and v differ in sign u s_v + v s_u can vanish (at the centre, z = -D/2).
-    combined = double_where(
-        opposite,
-        direct,
-        lambda zz: radius**2 * height * (height + 2.0 * zz) / (s_u * s_v * ((height + zz) * s_v + zz * s_u)),
-        z,
-    )
-    return 0.5 * remanence * combined
+    numerator = jnp.where(opposite, a - b, radius**2 * height * (u + z))
+    denominator = jnp.where(opposite, 1.0, a + b)
+    return 0.5 * remanence * numerator / (s_u * s_v * denominator)
