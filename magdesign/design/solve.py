@@ -729,15 +729,21 @@ class _Feasibility(eqx.Module):
 _ADJOINT = optx.ImplicitAdjoint(linear_solver=LUOrSVD())
 
 
-def _implicit_derivatives(equations, root, theta):
+def _implicit_derivatives(equations, root, theta, usable):
     """(len(root), p) d root / d theta at a ``root`` of ``equations(z, theta)`` = (0, aux):
     the tangents that optimistix's implicit adjoint gives a root find's answer, asked of
     it at the root apart from the root find. Forward mode through the root find itself
     (jacfwd of the polish) traced its whole loop under JAX's jvp and vmap, and with it the
-    model: 0.2 s of the default design's 1.1 s trace, 3 s of the axisymmetric one's 17 s."""
+    model: 0.2 s of the default design's 1.1 s trace, 3 s of the axisymmetric one's 17 s.
+
+    ``usable``: False where the root or the equations there are not finite. The equations
+    are then zero (so are the derivatives, which the caller masks): lineax checks the
+    implicit solve's answer with an equinox error, which, traced as NaN (see
+    :func:`_errors_as_nan`), turned every member of a vmapped batch to NaN as soon as one
+    member's answer was not finite, the derivatives of a sweep's good points with it."""
 
     def root_of(theta):
-        return _ADJOINT.apply(_given_root, _equations_at, (equations, theta, root), frozenset())[0]
+        return _ADJOINT.apply(_given_root, _equations_at, (equations, theta, root, usable), frozenset())[0]
 
     return jax.jacfwd(root_of)(theta)
 
@@ -747,8 +753,8 @@ def _given_root(inputs):
 
 
 def _equations_at(root, _, inputs):
-    equations, theta = inputs[:2]
-    return equations(root, theta)[0]
+    equations, theta, _, usable = inputs[:4]
+    return jnp.where(usable, equations(root, theta)[0], 0.0)
 
 
 def _last_evaluated(solution):
@@ -828,7 +834,8 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     y, multipliers, residual, (outputs, c), (equations, root) = _polish(
         problem, y_start, multipliers_start, theta, active, search.weight, settings, y_max, jet
     )
-    dy = _implicit_derivatives(equations, root, theta)[:n] if theta.shape[0] else jnp.zeros((n, 0))
+    usable = jnp.all(jnp.isfinite(root)) & jnp.isfinite(residual)
+    dy = _implicit_derivatives(equations, root, theta, usable)[:n] if theta.shape[0] else jnp.zeros((n, 0))
     # The polish refines the search's point; one that ends outside the box or far away
     # found another solution of the equations, and the search's point stands.
     kept = (

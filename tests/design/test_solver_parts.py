@@ -49,7 +49,7 @@ def test_kkt_residual_derivatives_match_plain_forward_mode():
     z = jnp.array([0.3, 0.6, 0.4, -0.2, 0.9])
 
     def plain(z, theta):
-        return kkt(z, theta)[0]
+        return kkt.evaluate(z, theta)[0]
 
     def custom(z, theta):
         return solver._kkt_residual(z, theta, kkt=kkt)[0]

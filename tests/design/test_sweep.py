@@ -7,6 +7,7 @@ import socket
 import subprocess
 import sys
 
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -88,6 +89,22 @@ def test_grid_shape_and_closed_form_with_derivatives():
     np.testing.assert_allclose(result.parameters["x"], y / a, rtol=1e-12)
     np.testing.assert_allclose(result.derivatives["y"]["x"], 1 / a, rtol=1e-10)
     np.testing.assert_allclose(result.derivatives["a"]["x"], -y / a**2, rtol=1e-10)
+
+
+def test_a_failed_point_leaves_the_derivatives_of_the_others():
+    """x sqrt(a) = y: at a = -1 the model is NaN (status "nonfinite", no derivatives);
+    the points beside it in the same batch keep theirs, dx/dy = 1 / sqrt(a) and
+    dx/da = -y / (2 a^1.5), as if solved alone."""
+    problem = Problem(lambda v: {"y": v["x"] * jnp.sqrt(v["a"])}, [Variable("x", 0.01, 100.0, 1.0)],
+                      targets=[Target("y", 2.0)], fixed={"a": 4.0})
+    a = np.array([0.25, 4.0, -1.0, 9.0])
+    result = sweep(problem, {"a": a})
+    assert list(result.status) == ["successful", "successful", "nonfinite", "successful"]
+    good = a > 0
+    np.testing.assert_allclose(result.parameters["x"][good], 2.0 / np.sqrt(a[good]), rtol=1e-12)
+    np.testing.assert_allclose(result.derivatives["y"]["x"][good], 1 / np.sqrt(a[good]), rtol=1e-10)
+    np.testing.assert_allclose(result.derivatives["a"]["x"][good], -2.0 / (2 * a[good] ** 1.5), rtol=1e-10)
+    assert np.isnan(result.derivatives["y"]["x"][2]) and np.isnan(result.derivatives["a"]["x"][2])
 
 
 def test_list_of_points_and_small_chunks_agree_with_one_batch():

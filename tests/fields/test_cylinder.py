@@ -345,8 +345,8 @@ def test_on_axis_derivatives_equal_their_closed_forms():
     """First derivatives in z, R and D and the second in z of B_z on the axis, against the
     bracket's derivatives worked out by hand (float64, at distances where they lose no
     digits): inside the magnet, at its centre (where the same-sign form's denominator
-    vanishes), on both faces and above it."""
-    z = np.array([-D / 2, -0.9 * D, -0.1 * D, -D, 0.0, 1e-6 * D, 0.3 * D, 2.0 * D, 7.4e-3])
+    vanishes), on both faces, above it and below it."""
+    z = np.array([-D / 2, -0.9 * D, -0.1 * D, -D, 0.0, 1e-6 * D, 0.3 * D, 2.0 * D, 7.4e-3, -1.3 * D, -3.0 * D])
     u = D + z
     s_u, s_v = np.hypot(R, u), np.hypot(R, z)
     expected = {
