@@ -16,6 +16,16 @@ import jax.numpy as jnp
 TINY = 1e-300
 
 
+def double_where(condition, safe_value, unsafe_fn, x):
+    """``where(condition, safe_value, unsafe_fn(x))`` with NaN-free gradients.
+
+    Where ``condition`` holds, ``unsafe_fn`` is evaluated at ``ones_like(x)``
+    instead of ``x`` so that its (discarded) value and derivative stay finite.
+    """
+    x_safe = jnp.where(condition, jnp.ones_like(x), x)
+    return jnp.where(condition, safe_value, unsafe_fn(x_safe))
+
+
 def safe_div(numerator, denominator, at_zero=0.0):
     """numerator / denominator, returning ``at_zero`` where the denominator is 0.
 

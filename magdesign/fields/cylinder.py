@@ -53,7 +53,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from magdesign._numerics import float_array, safe_sqrt
+from magdesign._numerics import double_where, float_array, safe_sqrt
 from magdesign._validation import check_last_axis, check_positive
 from magdesign.fields._special import (
     AXIS_SERIES_S,
@@ -776,6 +776,5 @@ def cylinder_on_axis(
     # they differ (at the centre, z = -D/2), so each form is taken where it is exact.
     a, b = u * s_v, z * s_u
     opposite = u * z < 0.0
-    numerator = jnp.where(opposite, a - b, radius**2 * height * (u + z))
-    denominator = jnp.where(opposite, 1.0, a + b)
-    return 0.5 * remanence * numerator / (s_u * s_v * denominator)
+    bracket = double_where(opposite, (a - b) / (s_u * s_v), lambda ab: radius**2 * height * (u + z) / (s_u * s_v * ab), a + b)
+    return 0.5 * remanence * bracket
