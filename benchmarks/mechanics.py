@@ -127,7 +127,7 @@ def factor_costs(loops=50):
     for shape in ((1, 12), DEFAULT_MESH, (4, 32)):
         mesh = _axisymmetric.Mesh(*shape, "bonded")
         _, H = _axisymmetric.derivatives(mesh, jnp.zeros(mesh.size).at[-1].set(0.2 * mm), params)
-        M = _axisymmetric._restricted(H, mesh.mask(True))
+        M = H.restricted(mesh.layout, jnp.asarray(mesh.mask(True))).dense(mesh.layout)
         rhs = jnp.asarray(np.random.default_rng(0).standard_normal(mesh.size))
         solvers = {
             "dense": lambda A, r: jsl.cho_solve((jnp.linalg.cholesky(A), True), r),

@@ -31,7 +31,8 @@ Tangent. The Hessian of the energy is assembled from exact element Hessians
 B^T (d^2 E / dF5^2) B: per Gauss point a 5 x 5 block (isochoric energy and the curvature of
 J), plus the rank-3 coupling of the projected Jbar; JAX differentiates only the
 five-argument densities. This is the Hessian of :func:`potential` to rounding (tested
-against ``jax.hessian``) at a tenth of the cost of differentiating the element energy.
+against ``jax.hessian``) at a tenth of the cost of differentiating the element energy,
+assembled straight into the blocks of its factor (:mod:`._blocks`).
 
 Solution. Newton's method on the total potential with the exact tangent, factored as a
 block tridiagonal matrix bordered by the plate travel (:mod:`._blocks`), a Levenberg
@@ -176,6 +177,7 @@ class Mesh:
         phi[1::2] = 0.5 * (corners[:-1] + corners[1:])  # mid-nodes halfway along each arc
         self.phi = phi
         self.layout = _blocks.Layout(self.rows, self.cols)
+        self.gradient_tables, self.hessian_tables = _assembly_tables(self)
 
     def mask(self, force_control: bool) -> np.ndarray:
         """1 for the unknowns of a solve, 0 for held values: (n_dof + 1,)."""
@@ -186,6 +188,24 @@ class Mesh:
         rho = outer_radius - thickness + thickness * np.arange(self.cols) / (self.cols - 1)
         X = jnp.stack([rho[None, :] * np.sin(self.phi)[:, None], rho[None, :] * np.cos(self.phi)[:, None]], -1)
         return X.reshape(-1, 2)
+
+
+def _assembly_tables(mesh):
+    """(gradient, tangent) :func:`_blocks.summing_tables` of a mesh: from the elements'
+    gradients (n_elem, 18) then the edges' (n_meridian, 4), to the gradient (n_dof + 1,);
+    from the elements' Hessians (n_elem, 18, 18) then the edges' (n_meridian, 4, 4), to
+    the flattened tangent blocks. Entries of fixed displacements are dropped (they enter
+    the energy as 0), and so are the travel's own entries of each edge: the travel's
+    gradient entry and diagonal entry sum every edge's, and are summed apart (that one
+    place receives n_meridian entries, where no other receives more than 4)."""
+    free = np.append(mesh.free_u, 1.0)
+    dofs = np.concatenate([mesh.elem_dofs.ravel(), mesh.edge_dofs.ravel()])
+    gradient = np.where((free[dofs] > 0) & (dofs < mesh.n_dof), dofs, -1)
+    rows = np.concatenate([np.repeat(d, d.shape[1], axis=1).ravel() for d in (mesh.elem_dofs, mesh.edge_dofs)])
+    cols = np.concatenate([np.tile(d, (1, d.shape[1])).ravel() for d in (mesh.elem_dofs, mesh.edge_dofs)])
+    hessian = np.where((free[rows] > 0) & (free[cols] > 0), mesh.layout.positions(rows, cols), -1)
+    blocks_size = (2 * mesh.layout.count - 1) * mesh.layout.block**2 + mesh.layout.count * mesh.layout.block
+    return _blocks.summing_tables(gradient, mesh.size), _blocks.summing_tables(hessian, blocks_size)
 
 
 def _excess(H5):
@@ -311,7 +331,8 @@ def potential(mesh, y, params, force=0.0):
 
 @traced_once
 def derivatives(mesh, y, params):
-    """Gradient (size,) and Hessian (size, size) of :func:`potential` (force 0) in y.
+    """Gradient (size,) and Hessian (:class:`_blocks.Blocks`) of :func:`potential`
+    (force 0) in y, fixed displacements held out (their rows and columns 0).
 
     The last gradient entry, dPi / dd, is the plate force (N)."""
     X_elem, u_elem, X_edge, z_edge = _parts(mesh, params, y)
@@ -320,12 +341,10 @@ def derivatives(mesh, y, params):
     in_axes = (0, 0) + (None,) * 3
     g_edge = jax.vmap(jax.grad(_edge_energy, argnums=1), in_axes)(*contact)
     H_edge = jax.vmap(jax.hessian(_edge_energy, argnums=1), in_axes)(*contact)
-    dofs, edges = mesh.elem_dofs, mesh.edge_dofs
-    g = jnp.zeros(mesh.size).at[dofs].add(g_elem).at[edges].add(g_edge)
-    H = jnp.zeros((mesh.size, mesh.size)).at[dofs[:, :, None], dofs[:, None, :]].add(H_elem)
-    H = H.at[edges[:, :, None], edges[:, None, :]].add(H_edge)
-    free = np.append(mesh.free_u, 1.0)  # fixed displacements enter the energy as 0
-    return free * g, free[:, None] * H * free[None, :]
+    g = _blocks.gather_sum(mesh.gradient_tables, jnp.concatenate([g_elem.ravel(), g_edge.ravel()]))
+    g = g.at[-1].set(jnp.sum(g_edge[:, -1]))
+    flat = _blocks.gather_sum(mesh.hessian_tables, jnp.concatenate([H_elem.ravel(), H_edge.ravel()]))
+    return g, _blocks.Blocks.from_flat(mesh.layout, flat, jnp.sum(H_edge[:, -1, -1]))
 
 
 def plate_force(mesh, y, params):
@@ -350,27 +369,26 @@ def _unit_last(mesh):
 
 
 def _factor(mesh, H):
-    """Cholesky factor (:class:`_blocks.Factor`) of H + lambda D with the smallest tried
-    shift lambda >= 0 that makes it positive definite (lambda = 0 first, then
+    """Cholesky factor (:class:`_blocks.Factor`) of H (:class:`_blocks.Blocks`) + lambda D
+    with the smallest tried shift lambda >= 0 that makes it positive definite (lambda = 0 first, then
     DOME_LEVENBERG_START, growing tenfold), D = |diag H| (Marquardt's scaling, floored at
     DOME_LEVENBERG_START times its largest entry): each unknown is shifted in proportion
     to its own stiffness, so the contact's penalty, the stiffest, does not set the shift of
     the soft bending modes (with lambda I it did, and a snap's jump crawled). One loop
     makes every try, so the program holds one factor (and a batch of matrices factors
     again only while one of them needs a shift)."""
-    diagonal = jnp.abs(jnp.diag(H))
+    diagonal = jnp.abs(H.diagonal_entries(mesh.layout))
     scale = DOME_LEVENBERG_START * jnp.maximum(diagonal, DOME_LEVENBERG_START * jnp.max(diagonal))
-    parts = _blocks.blocks(mesh.layout, H)
 
     def attempt(carry):
         _, k = carry
-        return _blocks.factor_blocks(mesh.layout, parts, jnp.where(k == 0, 0.0, scale * 10.0 ** (k - 1))), k + 1
+        return _blocks.factor_blocks(mesh.layout, H, jnp.where(k == 0, 0.0, scale * 10.0 ** (k - 1))), k + 1
 
     def cond(carry):
         F, k = carry
         return (k == 0) | (~F.finite() & (k <= LEVENBERG_MAX))
 
-    shapes = jax.eval_shape(lambda parts: _blocks.factor_blocks(mesh.layout, parts), parts)
+    shapes = jax.eval_shape(lambda H: _blocks.factor_blocks(mesh.layout, H), H)
     untried = jax.tree.map(lambda a: jnp.full(a.shape, jnp.nan, a.dtype), shapes)
     F, _ = lax.while_loop(cond, attempt, (untried, 0))
     return F
@@ -403,7 +421,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         """(y less Newton's step for the gradient g and Hessian H, cut back until Armijo's
         test holds, the potential there, whether the search gave up); pi0 the potential at
         y, NaN where not yet evaluated."""
-        dy = _blocks.solve(mesh.layout, _factor(mesh, _restricted(H, mask)), g)
+        dy = _blocks.solve(mesh.layout, _factor(mesh, H.restricted(mesh.layout, mask)), g)
         slope = jnp.dot(g, dy)
 
         # The potential at alpha = 2^-k for k = -1 (y itself, where pi0 is not yet known),
@@ -444,15 +462,10 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         y, pi, gave_up = lax.cond(done, lambda: (y, pi0, gave_up), lambda: step(y, pi0, g, H))
         return y, pi, size, it + jnp.where(done, 0, 1), gave_up, (done, stopped, H, reaction)
 
-    unset = (False, False, jnp.zeros((mesh.size, mesh.size)), jnp.zeros(()))
+    unset = (False, False, _blocks.Blocks.zeros(mesh.layout), jnp.zeros(()))
     carry = (y0, jnp.nan, jnp.inf, 0, False, unset)
     y, _, size, iterations, _, (_, stopped, H, reaction) = lax.while_loop(lambda c: ~c[-1][0], body, carry)
     return y, (size <= tol) | (stopped & (size <= DOME_ROUNDING_SLACK * tol)), iterations, H, reaction
-
-
-def _restricted(H, mask):
-    """H on the unknowns (mask 1), the identity on the held values."""
-    return mask[:, None] * H * mask[None, :] + jnp.diag(1 - mask)
 
 
 def _control(mesh, force_control, value):
@@ -492,10 +505,10 @@ def _implicit_jvp(mesh, control, primals, tangents):
         r_dot = mask * g_dot - value_dot * _unit_last(mesh)
         # only the solve's matvec is differentiated (custom_linear_solve): a factor with
         # tangents would cost second derivatives a Cholesky derivative per direction
-        F = _factor(mesh, lax.stop_gradient(_restricted(H, mask)))
+        F = _factor(mesh, lax.stop_gradient(H.restricted(mesh.layout, mask)))
 
         def hessian_times(v):
-            return H @ v
+            return H.matvec(mesh.layout, v)
 
         # held values move with their hold (r = y - held there); the unknowns follow from
         # the symmetric system of their own rows
@@ -536,9 +549,10 @@ def _tangent(mesh, H):
     """(dy/dd (size,), dF/dd (N/m)) along the travel-held equilibria through a state whose
     Hessian is H: the unknowns' rows of the tangent system with the travel moving, t[-1] = 1."""
     mask = mesh.mask(False)
-    tangent = -_blocks.solve(mesh.layout, _factor(mesh, _restricted(H, mask)), mask * H[:, -1])
+    column = H.last_column(mesh.layout)
+    tangent = -_blocks.solve(mesh.layout, _factor(mesh, H.restricted(mesh.layout, mask)), mask * column)
     tangent = tangent.at[-1].set(1.0)
-    return tangent, H[-1] @ tangent
+    return tangent, column @ tangent
 
 
 def _start_path(mesh, step):

@@ -21,6 +21,7 @@ derivatives = jax.jit(_axisymmetric.derivatives, static_argnums=0)
 hessian = jax.jit(jax.hessian(_axisymmetric.potential, argnums=1), static_argnums=0)
 gradient = jax.jit(jax.grad(_axisymmetric.potential, argnums=1), static_argnums=0)
 factor = jax.jit(_blocks.factor, static_argnums=0)
+factor_blocks = jax.jit(_blocks.factor_blocks, static_argnums=0)
 solve = jax.jit(_blocks.solve, static_argnums=0)
 
 
@@ -40,9 +41,17 @@ def test_assembled_hessian_equals_jax_hessian_of_the_potential(shape):
     g, H = derivatives(mesh, y, PARAMS)
     free = np.append(mesh.free_u, 1.0)
     g_ref = free * gradient(mesh, y, PARAMS)
-    H_ref = free[:, None] * hessian(mesh, y, PARAMS) * free[None, :]
+    H_ref = free[:, None] * np.asarray(hessian(mesh, y, PARAMS)) * free[None, :]
     np.testing.assert_allclose(g, g_ref, rtol=0, atol=1e-12 * np.max(np.abs(g_ref)))
-    np.testing.assert_allclose(H, H_ref, rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
+    np.testing.assert_allclose(H.dense(mesh.layout), H_ref, rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
+    # what the solver reads of the blocks, against the same matrix
+    np.testing.assert_allclose(H.diagonal_entries(mesh.layout), np.diag(H_ref), rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
+    np.testing.assert_allclose(H.last_column(mesh.layout), H_ref[:, -1], rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
+    for force_control in (False, True):
+        mask = mesh.mask(force_control)
+        M_ref = mask[:, None] * H_ref * mask[None, :] + np.diag(1 - mask)
+        M = H.restricted(mesh.layout, jnp.asarray(mask)).dense(mesh.layout)
+        np.testing.assert_allclose(M, M_ref, rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
 
 
 @pytest.mark.parametrize("shape", [(1, 12), (2, 16), (3, 5)])
@@ -50,9 +59,10 @@ def test_assembled_hessian_equals_jax_hessian_of_the_potential(shape):
 def test_block_factor_solves_as_numpy_does(shape, force_control):
     mesh = _axisymmetric.Mesh(*shape, "bonded")
     _, H = derivatives(mesh, pressed_state(mesh), PARAMS)
-    M = _axisymmetric._restricted(H, mesh.mask(force_control))
+    restricted = H.restricted(mesh.layout, jnp.asarray(mesh.mask(force_control)))
+    M = restricted.dense(mesh.layout)
     rhs = np.random.default_rng(2).standard_normal(mesh.size)
-    F = factor(mesh.layout, M)
+    F = factor_blocks(mesh.layout, restricted)
     assert bool(F.finite())
     if force_control:
         assert np.max(np.abs(M[:-1, -1])) > 0  # the border is used
@@ -64,7 +74,7 @@ def test_block_factor_solves_as_numpy_does(shape, force_control):
 def test_block_factor_flags_matrices_that_are_not_positive_definite():
     mesh = _axisymmetric.Mesh(2, 6, "bonded")
     _, H = derivatives(mesh, pressed_state(mesh), PARAMS)
-    M = _axisymmetric._restricted(H, mesh.mask(True))
+    M = H.restricted(mesh.layout, jnp.asarray(mesh.mask(True))).dense(mesh.layout)
     assert bool(factor(mesh.layout, M).finite())
     # a negative pivot in the displacements' blocks
     assert not bool(factor(mesh.layout, M.at[40, 40].set(-1.0)).finite())
@@ -76,12 +86,12 @@ def test_block_factor_flags_matrices_that_are_not_positive_definite():
 def test_levenberg_shift_is_the_smallest_tried_that_makes_the_tangent_definite():
     mesh = _axisymmetric.Mesh(2, 6, "bonded")
     _, H = derivatives(mesh, pressed_state(mesh), PARAMS)
-    definite = _axisymmetric._restricted(H, mesh.mask(True))
+    definite = H.restricted(mesh.layout, jnp.asarray(mesh.mask(True))).dense(mesh.layout)
     matrices = jnp.stack([definite, definite.at[40, 40].set(-1e-3 * definite[40, 40])])
     rhs = np.random.default_rng(3).standard_normal(mesh.size)
 
     def shifted_solve(M):
-        return _blocks.solve(mesh.layout, _axisymmetric._factor(mesh, M), jnp.asarray(rhs))
+        return _blocks.solve(mesh.layout, _axisymmetric._factor(mesh, _blocks.blocks(mesh.layout, M)), jnp.asarray(rhs))
 
     one_by_one = [jax.jit(shifted_solve)(M) for M in matrices]
     batched = jax.jit(jax.vmap(shifted_solve))(matrices)  # lanes with and without a shift
