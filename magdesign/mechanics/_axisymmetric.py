@@ -368,30 +368,35 @@ def _unit_last(mesh):
     return np.append(np.zeros(mesh.n_dof), 1.0)
 
 
-def _factor(mesh, H):
-    """Cholesky factor (:class:`_blocks.Factor`) of H (:class:`_blocks.Blocks`) + lambda D
-    with the smallest tried shift lambda >= 0 that makes it positive definite (lambda = 0 first, then
-    DOME_LEVENBERG_START, growing tenfold), D = |diag H| (Marquardt's scaling, floored at
-    DOME_LEVENBERG_START times its largest entry): each unknown is shifted in proportion
-    to its own stiffness, so the contact's penalty, the stiffest, does not set the shift of
-    the soft bending modes (with lambda I it did, and a snap's jump crawled). One loop
-    makes every try, so the program holds one factor (and a batch of matrices factors
-    again only while one of them needs a shift)."""
+def _factor(mesh, H, resume=1):
+    """(Cholesky factor (:class:`_blocks.Factor`) of H (:class:`_blocks.Blocks`) + lambda D,
+    the index of its shift lambda): the smallest tried shift lambda >= 0 that makes it
+    positive definite, tried in the order lambda = 0 (index 0), then DOME_LEVENBERG_START
+    10^(index - 1) from index ``resume`` (>= 1) on, growing tenfold. D = |diag H|
+    (Marquardt's scaling, floored at DOME_LEVENBERG_START times its largest entry): each
+    unknown is shifted in proportion to its own stiffness, so the contact's penalty, the
+    stiffest, does not set the shift of the soft bending modes (with lambda I it did, and
+    a snap's jump crawled). One loop makes every try, so the program holds one factor (and
+    a batch of matrices factors again while any one of them needs a shift)."""
     diagonal = jnp.abs(H.diagonal_entries(mesh.layout))
     scale = DOME_LEVENBERG_START * jnp.maximum(diagonal, DOME_LEVENBERG_START * jnp.max(diagonal))
 
+    def index(tries):
+        return jnp.where(tries == 0, 0, resume + tries - 1)
+
     def attempt(carry):
-        _, k = carry
-        return _blocks.factor_blocks(mesh.layout, H, jnp.where(k == 0, 0.0, scale * 10.0 ** (k - 1))), k + 1
+        _, tries = carry
+        k = index(tries)
+        return _blocks.factor_blocks(mesh.layout, H, jnp.where(k == 0, 0.0, scale * 10.0 ** (k - 1))), tries + 1
 
     def cond(carry):
-        F, k = carry
-        return (k == 0) | (~F.finite() & (k <= LEVENBERG_MAX))
+        F, tries = carry
+        return (tries == 0) | (~F.finite() & (index(tries) <= LEVENBERG_MAX))
 
     shapes = jax.eval_shape(lambda H: _blocks.factor_blocks(mesh.layout, H), H)
     untried = jax.tree.map(lambda a: jnp.full(a.shape, jnp.nan, a.dtype), shapes)
-    F, _ = lax.while_loop(cond, attempt, (untried, 0))
-    return F
+    F, tries = lax.while_loop(cond, attempt, (untried, jnp.asarray(0)))
+    return F, index(tries - 1)
 
 
 def _tolerance(params):
@@ -399,10 +404,14 @@ def _tolerance(params):
     return DOME_RESIDUAL_TOL * params[2].shear_modulus * params[1] ** 2
 
 
-def newton(mesh, mask, held, force, params, y0, max_iter):
+def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
     """Minimise Pi - force d over the unknowns (mask 1) from y0, the others held at
     ``held``: (state, converged, iterations, the Hessian of the potential at the state,
-    the plate force at the state (N): the reaction dPi/dd, read off the gradient).
+    the plate force at the state (N): the reaction dPi/dd, read off the gradient, the
+    index of the last Levenberg shift needed (see :func:`_factor`)). ``shift``: that
+    index from earlier solves (0: none), where a factor that needs a shift resumes its
+    tries a tenth below (the path's steps need theirs in their first iterations, 4 to 6
+    of them a time on seed 001's dome, the same from step to step).
     Converged: the largest entry of the residual (an out-of-balance force, N) is at most
     :func:`_tolerance`, or at most DOME_ROUNDING_SLACK times it where a Newton step no
     longer halves it (float64's floor, see magdesign._numerics)."""
@@ -417,11 +426,12 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
     def on_floor(size, previous):
         return (size > previous / 2) & (size <= DOME_ROUNDING_SLACK * tol)
 
-    def step(y, pi0, g, H):
+    def step(y, pi0, g, H, shift):
         """(y less Newton's step for the gradient g and Hessian H, cut back until Armijo's
-        test holds, the potential there, whether the search gave up); pi0 the potential at
-        y, NaN where not yet evaluated."""
-        dy = _blocks.solve(mesh.layout, _factor(mesh, H.restricted(mesh.layout, mask)), g)
+        test holds, the potential there, whether the search gave up, the shift index);
+        pi0 the potential at y, NaN where not yet evaluated."""
+        F, used = _factor(mesh, H.restricted(mesh.layout, mask), jnp.maximum(shift - 1, 1))
+        dy = _blocks.solve(mesh.layout, F, g)
         slope = jnp.dot(g, dy)
 
         # The potential at alpha = 2^-k for k = -1 (y itself, where pi0 is not yet known),
@@ -445,27 +455,28 @@ def newton(mesh, mask, held, force, params, y0, max_iter):
         start = (jnp.where(jnp.isnan(pi0), -2, -1), jnp.inf, pi0)
         k, pi, _ = lax.while_loop(search_cond, shorter, start)
         alpha = alpha_of(k)
-        return y - alpha * dy, pi, alpha <= 2.0**-LINE_SEARCH_MAX
+        return y - alpha * dy, pi, alpha <= 2.0**-LINE_SEARCH_MAX, jnp.where(used > 0, used, shift)
 
     # Each turn linearises at y, then steps unless y is where the solve ends: one
     # evaluation of the derivatives in the compiled loop (as many evaluations as with one
     # before the loop and one after each step). pi0: the potential at y, carried from the
     # line search that reached y (NaN at y0, where the first search evaluates it).
     def body(carry):
-        y, pi0, previous, it, gave_up, _ = carry
+        y, pi0, previous, it, gave_up, shift, _ = carry
         g, H = derivatives(mesh, y, params)
         reaction = g[-1]
         g = mask * (g - force * unit)
         size = jnp.max(jnp.abs(g))
         stopped = gave_up | on_floor(size, previous)
         done = ~(size > tol) | (it >= max_iter) | stopped  # a NaN residual stops it too
-        y, pi, gave_up = lax.cond(done, lambda: (y, pi0, gave_up), lambda: step(y, pi0, g, H))
-        return y, pi, size, it + jnp.where(done, 0, 1), gave_up, (done, stopped, H, reaction)
+        y, pi, gave_up, shift = lax.cond(done, lambda: (y, pi0, gave_up, shift), lambda: step(y, pi0, g, H, shift))
+        return y, pi, size, it + jnp.where(done, 0, 1), gave_up, shift, (done, stopped, H, reaction)
 
     unset = (False, False, _blocks.Blocks.zeros(mesh.layout), jnp.zeros(()))
-    carry = (y0, jnp.nan, jnp.inf, 0, False, unset)
-    y, _, size, iterations, _, (_, stopped, H, reaction) = lax.while_loop(lambda c: ~c[-1][0], body, carry)
-    return y, (size <= tol) | (stopped & (size <= DOME_ROUNDING_SLACK * tol)), iterations, H, reaction
+    carry = (y0, jnp.nan, jnp.inf, 0, False, jnp.asarray(shift), unset)
+    y, _, size, iterations, _, shift, (_, stopped, H, reaction) = lax.while_loop(lambda c: ~c[-1][0], body, carry)
+    converged = (size <= tol) | (stopped & (size <= DOME_ROUNDING_SLACK * tol))
+    return y, converged, iterations, H, reaction, shift
 
 
 def _control(mesh, force_control, value):
@@ -505,7 +516,7 @@ def _implicit_jvp(mesh, control, primals, tangents):
         r_dot = mask * g_dot - value_dot * _unit_last(mesh)
         # only the solve's matvec is differentiated (custom_linear_solve): a factor with
         # tangents would cost second derivatives a Cholesky derivative per direction
-        F = _factor(mesh, lax.stop_gradient(H.restricted(mesh.layout, mask)))
+        F, _ = _factor(mesh, lax.stop_gradient(H.restricted(mesh.layout, mask)))
 
         def hessian_times(v):
             return H.matvec(mesh.layout, v)
@@ -529,7 +540,8 @@ class Path(eqx.Module):
     its plate force (N), its tangent dy/dd (size,) and stiffness dF/dd (N/m) along the
     path, the state before it (for the secant predictor), the next travel step (m), and
     the count of steps tried. ``cut``: the last step tried failed (and ``step`` was cut to a
-    quarter of it); ``failed``: a snap's jump did not converge."""
+    quarter of it); ``failed``: a snap's jump did not converge; ``shift``: the index of the
+    Levenberg shift its steps last needed (0: none yet; see :func:`newton`)."""
 
     y: jax.Array
     force: jax.Array
@@ -540,6 +552,7 @@ class Path(eqx.Module):
     count: jax.Array
     cut: jax.Array
     failed: jax.Array
+    shift: jax.Array
 
     def can_go_on(self, max_travel):
         return ~self.failed & (self.count < PATH_MAX_STEPS) & (self.y[-1] < max_travel)
@@ -550,7 +563,7 @@ def _tangent(mesh, H):
     Hessian is H: the unknowns' rows of the tangent system with the travel moving, t[-1] = 1."""
     mask = mesh.mask(False)
     column = H.last_column(mesh.layout)
-    tangent = -_blocks.solve(mesh.layout, _factor(mesh, H.restricted(mesh.layout, mask)), mask * column)
+    tangent = -_blocks.solve(mesh.layout, _factor(mesh, H.restricted(mesh.layout, mask))[0], mask * column)
     tangent = tangent.at[-1].set(1.0)
     return tangent, column @ tangent
 
@@ -561,7 +574,7 @@ def _start_path(mesh, step):
     zero = jnp.zeros(mesh.size)
     return Path(
         zero, jnp.zeros(()), zero, jnp.zeros(()), zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False),
-        jnp.asarray(False),
+        jnp.asarray(False), jnp.asarray(0),
     )
 
 
@@ -582,13 +595,13 @@ def _path_guess(path, goal, thickness):
     return guess, d_new, max_iter, jump
 
 
-def _path_update(params, path, y_new, force_new, tangent_new, ok, iterations, jump):
+def _path_update(params, path, y_new, force_new, tangent_new, ok, iterations, jump, shift):
     """The path after Newton's answer to :func:`_path_guess`: a converged step is taken
     (the next step doubles if it was easy, halves if it was hard; after a jump the secant
     starts afresh); a failed one is refused and the step cut to a quarter.
     ``force_new``: the plate force (N) at ``y_new``; ``tangent_new``: (dy/dd, dF/dd) at
     ``y_new`` (:func:`_tangent`), or None, which keeps the path's tangent (a path whose
-    tangents are not read)."""
+    tangents are not read); ``shift``: Newton's last Levenberg shift index, for the next."""
     factor = jnp.where(iterations <= PATH_EASY_ITER, 2.0, jnp.where(iterations >= PATH_HARD_ITER, 0.5, 1.0))
     step = jnp.where(ok, jnp.maximum(path.step, SNAP_STEP * params[1]) * factor, path.step / 4)
     tangent, stiffness = (path.tangent, path.stiffness) if tangent_new is None else jax.tree.map(
@@ -604,6 +617,7 @@ def _path_update(params, path, y_new, force_new, tangent_new, ok, iterations, ju
         count=path.count + 1,
         cut=~ok,
         failed=~ok & jump,
+        shift=shift,
     )
 
 
@@ -640,8 +654,8 @@ def follow_travels(mesh, params, travels, step):
     def advance(path, goal):
         guess, d_new, max_iter, jump = _path_guess(path, goal, params[1])
         mask, held, force = _control(mesh, False, d_new)
-        y, ok, iterations, _, reaction = newton(mesh, mask, held, force, params, guess, max_iter)
-        return _path_update(params, path, y, reaction, None, ok, iterations, jump)
+        y, ok, iterations, _, reaction, shift = newton(mesh, mask, held, force, params, guess, max_iter, path.shift)
+        return _path_update(params, path, y, reaction, None, ok, iterations, jump, shift)
 
     def to(path, goal):
         path = eqx.tree_at(lambda p: p.count, path, jnp.asarray(0))
@@ -700,7 +714,7 @@ def first_crossings(mesh, params, levels, max_travel, step):
         max_iter = jnp.where(solving, NEWTON_MAX_ITER, jnp.where(starting, 0, max_iter))
         d_new = jnp.where(starting, 0.0, d_new)
         mask, held, force = _control(mesh, solving, jnp.where(solving, levels[level], d_new))
-        y, ok, iterations, H, reaction = newton(mesh, mask, held, force, params, guess, max_iter)
+        y, ok, iterations, H, reaction, shift = newton(mesh, mask, held, force, params, guess, max_iter, path.shift)
         just = jnp.arange(k) == level
         # A solved level's state, inside the step, is a closer lower end for the levels
         # still pending above it: their Hermite guesses span less of the step (on seed
@@ -717,7 +731,7 @@ def first_crossings(mesh, params, levels, max_travel, step):
             c,
             (on_level(just & solving, jnp.broadcast_to(y, blank.shape), c.states), jnp.where(just & solving, ok, c.converged)),
         )
-        new = _path_update(params, path, y, reaction, tangent, ok & ~solving, iterations, jump)
+        new = _path_update(params, path, y, reaction, tangent, ok & ~solving, iterations, jump, shift)
         new = jax.tree.map(lambda a, b: jnp.where(solving, b, a), new, path)
         with_tangent = eqx.tree_at(lambda p: (p.tangent, p.stiffness), path, tangent)
         new = jax.tree.map(lambda a, b: jnp.where(starting, a, b), with_tangent, new)

@@ -83,7 +83,11 @@ def test_block_factor_flags_matrices_that_are_not_positive_definite():
     assert np.linalg.eigvalsh(np.asarray(M.at[-1, -1].set(0.0)))[0] < 0
 
 
-def test_levenberg_shift_is_the_smallest_tried_that_makes_the_tangent_definite():
+@pytest.mark.parametrize("resume", [1, 3, 7])
+def test_levenberg_shift_is_the_smallest_tried_that_makes_the_tangent_definite(resume):
+    """Tried: no shift, then the shifts from index ``resume`` on (Newton resumes where its
+    last shifted factor needed one); the chosen shift and its index against numpy's
+    eigenvalues of each shifted matrix."""
     mesh = _axisymmetric.Mesh(2, 6, "bonded")
     _, H = derivatives(mesh, pressed_state(mesh), PARAMS)
     definite = H.restricted(mesh.layout, jnp.asarray(mesh.mask(True))).dense(mesh.layout)
@@ -91,18 +95,21 @@ def test_levenberg_shift_is_the_smallest_tried_that_makes_the_tangent_definite()
     rhs = np.random.default_rng(3).standard_normal(mesh.size)
 
     def shifted_solve(M):
-        return _blocks.solve(mesh.layout, _axisymmetric._factor(mesh, _blocks.blocks(mesh.layout, M)), jnp.asarray(rhs))
+        F, index = _axisymmetric._factor(mesh, _blocks.blocks(mesh.layout, M), resume)
+        return _blocks.solve(mesh.layout, F, jnp.asarray(rhs)), index
 
     one_by_one = [jax.jit(shifted_solve)(M) for M in matrices]
     batched = jax.jit(jax.vmap(shifted_solve))(matrices)  # lanes with and without a shift
     chosen = []
-    for M, x, x_batched in zip(np.asarray(matrices), one_by_one, batched):
+    for M, (x, index), x_batched, index_batched in zip(np.asarray(matrices), one_by_one, *batched):
         diagonal = np.abs(np.diag(M))  # Marquardt's scaling, floored
         scale = DOME_LEVENBERG_START * np.maximum(diagonal, DOME_LEVENBERG_START * diagonal.max())
-        shifts = [0.0 * scale] + [scale * 10.0**k for k in range(_axisymmetric.LEVENBERG_MAX)]
+        tried = [0] + list(range(resume, _axisymmetric.LEVENBERG_MAX + 1))
+        shifts = [0.0 * scale if k == 0 else scale * 10.0 ** (k - 1) for k in tried]
         positive = [np.linalg.eigvalsh(M + np.diag(s))[0] > 0 for s in shifts]
-        chosen.append(shifts[positive.index(True)])
-        x_ref = np.linalg.solve(M + np.diag(chosen[-1]), rhs)
+        chosen.append(tried[positive.index(True)])
+        assert int(index) == int(index_batched) == chosen[-1]
+        x_ref = np.linalg.solve(M + np.diag(shifts[positive.index(True)]), rhs)
         np.testing.assert_allclose(x, x_ref, rtol=0, atol=1e-9 * np.max(np.abs(x_ref)))
         np.testing.assert_allclose(x_batched, x_ref, rtol=0, atol=1e-9 * np.max(np.abs(x_ref)))
-    assert np.all(chosen[0] == 0) and np.all(chosen[1] > 0)
+    assert chosen[0] == 0 and chosen[1] >= resume
