@@ -87,7 +87,7 @@ PATH_NEWTON_MAX_ITER = 20
 # predicted decrease that a step must achieve.
 LINE_SEARCH_MAX = 30
 ARMIJO = 0.25
-# Levenberg shifts tried per iteration at most (each ten times the previous one).
+# Index of the largest Levenberg shift tried (each ten times the previous one; see _factor).
 LEVENBERG_MAX = 12
 # Path following: steps at most, and the Newton iterations at or below which a step doubles
 # and from which on it halves. (At 16, seed 001's dome kept a first step that took 15
@@ -377,7 +377,8 @@ def _factor(mesh, H, resume=1):
     unknown is shifted in proportion to its own stiffness, so the contact's penalty, the
     stiffest, does not set the shift of the soft bending modes (with lambda I it did, and
     a snap's jump crawled). One loop makes every try, so the program holds one factor (and
-    a batch of matrices factors again while any one of them needs a shift)."""
+    a batch of matrices factors again while any one of them needs a shift). Where no try
+    makes it positive definite: a factor that is not finite, and index LEVENBERG_MAX."""
     diagonal = jnp.abs(H.diagonal_entries(mesh.layout))
     scale = DOME_LEVENBERG_START * jnp.maximum(diagonal, DOME_LEVENBERG_START * jnp.max(diagonal))
 
@@ -408,10 +409,13 @@ def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
     """Minimise Pi - force d over the unknowns (mask 1) from y0, the others held at
     ``held``: (state, converged, iterations, the Hessian of the potential at the state,
     the plate force at the state (N): the reaction dPi/dd, read off the gradient, the
-    index of the last Levenberg shift needed (see :func:`_factor`)). ``shift``: that
-    index from earlier solves (0: none), where a factor that needs a shift resumes its
-    tries a tenth below (the path's steps need theirs in their first iterations, 4 to 6
-    of them a time on seed 001's dome, the same from step to step).
+    shift hint for the next solve). ``shift``, the hint: the index (see :func:`_factor`)
+    of the shift that the last factor needing one found, in this solve or an earlier one
+    (0: none yet); a factor that needs a shift resumes its tries a tenth below it. The
+    path's steps need a shift in their first iterations, of index 4 to 6 on seed 001's
+    dome, much the same from step to step, which the tries from index 1 climbed to each
+    time. The hint comes down a tenth with each factor that needs a shift, not with one
+    that needs none.
     Converged: the largest entry of the residual (an out-of-balance force, N) is at most
     :func:`_tolerance`, or at most DOME_ROUNDING_SLACK times it where a Newton step no
     longer halves it (float64's floor, see magdesign._numerics)."""
@@ -431,6 +435,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
         test holds, the potential there, whether the search gave up, the shift index);
         pi0 the potential at y, NaN where not yet evaluated."""
         F, used = _factor(mesh, H.restricted(mesh.layout, mask), jnp.maximum(shift - 1, 1))
+        # the hint is the shift a factor last needed; one that found none keeps the hint
         dy = _blocks.solve(mesh.layout, F, g)
         slope = jnp.dot(g, dy)
 
@@ -455,7 +460,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
         start = (jnp.where(jnp.isnan(pi0), -2, -1), jnp.inf, pi0)
         k, pi, _ = lax.while_loop(search_cond, shorter, start)
         alpha = alpha_of(k)
-        return y - alpha * dy, pi, alpha <= 2.0**-LINE_SEARCH_MAX, jnp.where(used > 0, used, shift)
+        return y - alpha * dy, pi, alpha <= 2.0**-LINE_SEARCH_MAX, jnp.where((used > 0) & F.finite(), used, shift)
 
     # Each turn linearises at y, then steps unless y is where the solve ends: one
     # evaluation of the derivatives in the compiled loop (as many evaluations as with one

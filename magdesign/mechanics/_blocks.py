@@ -156,8 +156,8 @@ class Blocks(eqx.Module):
 
     @classmethod
     def from_flat(cls, layout: Layout, flat, corner) -> "Blocks":
-        """The blocks kept in ``flat`` (the places of :meth:`Layout.positions`), an
-        identity added at the padding, and the ``corner``."""
+        """The blocks kept in ``flat`` ((2 K - 1) b^2 + K b,: the places of
+        :meth:`Layout.positions`), an identity added at the padding, and the ``corner``."""
         b, K = layout.block, layout.count
         diagonal = flat[: K * b * b].reshape(K, b, b) + np.eye(b) * layout.pad[:, :, None]
         below = flat[K * b * b : (2 * K - 1) * b * b].reshape(K - 1, b, b)
@@ -165,6 +165,7 @@ class Blocks(eqx.Module):
 
     @classmethod
     def zeros(cls, layout: Layout) -> "Blocks":
+        """Blocks of the zero matrix (a loop's initial value)."""
         b, K = layout.block, layout.count
         return cls(jnp.zeros((K, b, b)), jnp.zeros((K - 1, b, b)), jnp.zeros((K, b)), jnp.zeros(()))
 
@@ -203,8 +204,9 @@ class Blocks(eqx.Module):
 
 
 def blocks(layout: Layout, M) -> Blocks:
-    """The :class:`Blocks` of M, whose displacement part has the layout's block
-    tridiagonal pattern (entries outside it are ignored)."""
+    """The :class:`Blocks` of a dense M, whose displacement part has the layout's block
+    tridiagonal pattern (entries outside it are ignored): for checks (the dome assembles
+    its tangent as blocks)."""
     s, pad = layout.source, layout.pad
     eye = np.eye(layout.block)
     diagonal = jnp.where(pad[:, :, None] | pad[:, None, :], eye * pad[:, :, None], M[s[:, :, None], s[:, None, :]])
@@ -241,7 +243,7 @@ def factor_blocks(layout: Layout, parts: Blocks, shift=0.0) -> Factor:
 def factor(layout: Layout, M, shift=0.0) -> Factor:
     """Cholesky factor of M + diag(``shift``) for the symmetric matrix M (n_dof + 1, n_dof + 1),
     whose displacement part has the layout's block tridiagonal pattern (entries outside
-    it are ignored); ``shift`` a scalar or (n_dof + 1,). Not positive definite: a factor
+    it are ignored), for checks; ``shift`` a scalar or (n_dof + 1,). Not positive definite: a factor
     that is not :meth:`Factor.finite`."""
     return factor_blocks(layout, blocks(layout, M), shift)
 
