@@ -407,9 +407,9 @@ def _tolerance(params):
 
 def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
     """Minimise Pi - force d over the unknowns (mask 1) from y0, the others held at
-    ``held``: (state, converged, iterations, the Hessian of the potential at the state,
-    the plate force at the state (N): the reaction dPi/dd, read off the gradient, the
-    shift hint for the next solve). ``shift``, the hint: the index (see :func:`_factor`)
+    ``held``: (state, converged, iterations, the Hessian of the potential at the state
+    (its blocks), the plate force at the state (N): the reaction dPi/dd, read off the
+    gradient, the shift hint for the next solve). ``shift``, the hint: the index (see :func:`_factor`)
     of the shift that the last factor needing one found, in this solve or an earlier one
     (0: none yet); a factor that needs a shift resumes its tries a tenth below it. The
     path's steps need a shift in their first iterations, of index 4 to 6 on seed 001's
@@ -435,7 +435,6 @@ def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
         test holds, the potential there, whether the search gave up, the shift index);
         pi0 the potential at y, NaN where not yet evaluated."""
         F, used = _factor(mesh, H.restricted(mesh.layout, mask), jnp.maximum(shift - 1, 1))
-        # the hint is the shift a factor last needed; one that found none keeps the hint
         dy = _blocks.solve(mesh.layout, F, g)
         slope = jnp.dot(g, dy)
 
@@ -460,6 +459,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
         start = (jnp.where(jnp.isnan(pi0), -2, -1), jnp.inf, pi0)
         k, pi, _ = lax.while_loop(search_cond, shorter, start)
         alpha = alpha_of(k)
+        # the hint: the shift a factor last needed (one that found none keeps it)
         return y - alpha * dy, pi, alpha <= 2.0**-LINE_SEARCH_MAX, jnp.where((used > 0) & F.finite(), used, shift)
 
     # Each turn linearises at y, then steps unless y is where the solve ends: one
