@@ -204,8 +204,7 @@ def _assembly_tables(mesh):
     rows = np.concatenate([np.repeat(d, d.shape[1], axis=1).ravel() for d in (mesh.elem_dofs, mesh.edge_dofs)])
     cols = np.concatenate([np.tile(d, (1, d.shape[1])).ravel() for d in (mesh.elem_dofs, mesh.edge_dofs)])
     hessian = np.where((free[rows] > 0) & (free[cols] > 0), mesh.layout.positions(rows, cols), -1)
-    blocks_size = (2 * mesh.layout.count - 1) * mesh.layout.block**2 + mesh.layout.count * mesh.layout.block
-    return _blocks.summing_tables(gradient, mesh.size), _blocks.summing_tables(hessian, blocks_size)
+    return _blocks.summing_tables(gradient, mesh.size), _blocks.summing_tables(hessian, mesh.layout.flat_size)
 
 
 def _excess(H5):

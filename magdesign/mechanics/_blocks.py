@@ -34,7 +34,9 @@ class Layout:
 
     ``source`` (K, b): the unknown at each place of the padded blocks (0 at a pad);
     ``pad`` (K, b): the padding places; ``place`` (n_dof,): each unknown's place in the
-    flattened blocks.
+    flattened blocks. A :class:`Blocks` flattened (:meth:`Blocks.from_flat`) holds the
+    diagonal blocks, from ``below_start`` the blocks below them, from ``column_start`` the
+    travel's column: ``flat_size`` entries.
     """
 
     def __init__(self, rows: int, cols: int):
@@ -48,6 +50,9 @@ class Layout:
         self.source = np.where(padded < 0, 0, padded).reshape(self.count, self.block)
         self.place = np.arange(rows * row_size) + row_size
         self.n_dof = rows * row_size
+        b, K = self.block, self.count
+        self.below_start, self.column_start = K * b * b, (2 * K - 1) * b * b
+        self.flat_size = self.column_start + K * b
 
     def band(self, v):
         """The displacements of v (n_dof + 1,) in the blocks' places (K, b), 0 at the pads."""
@@ -63,7 +68,7 @@ class Layout:
         for index arrays i, j; -1 for an entry kept as its transpose or not kept (the
         corner, M[-1, -1], which :meth:`Blocks.from_flat` takes apart)."""
         i, j = np.asarray(i), np.asarray(j)
-        b, K, n = self.block, self.count, self.n_dof
+        b, n = self.block, self.n_dof
         travel_i, travel_j = i == n, j == n
         gi, pi = np.divmod(self.place[np.where(travel_i, 0, i)], b)
         gj, pj = np.divmod(self.place[np.where(travel_j, 0, j)], b)
@@ -72,9 +77,9 @@ class Layout:
         on_diagonal = displacements & (gi == gj)
         position[on_diagonal] = ((gi * b + pi) * b + pj)[on_diagonal]
         below = displacements & (gi == gj + 1)
-        position[below] = (K * b * b + (gj * b + pi) * b + pj)[below]
+        position[below] = (self.below_start + (gj * b + pi) * b + pj)[below]
         column = ~travel_i & travel_j
-        position[column] = ((2 * K - 1) * b * b + gi * b + pi)[column]
+        position[column] = (self.column_start + gi * b + pi)[column]
         if np.any(displacements & (np.abs(gi - gj) > 1)):
             raise ValueError("the matrix is not block tridiagonal in this layout")
         return position
@@ -156,12 +161,12 @@ class Blocks(eqx.Module):
 
     @classmethod
     def from_flat(cls, layout: Layout, flat, corner) -> "Blocks":
-        """The blocks kept in ``flat`` ((2 K - 1) b^2 + K b,: the places of
+        """The blocks kept in ``flat`` (layout.flat_size,: the places of
         :meth:`Layout.positions`), an identity added at the padding, and the ``corner``."""
         b, K = layout.block, layout.count
-        diagonal = flat[: K * b * b].reshape(K, b, b) + np.eye(b) * layout.pad[:, :, None]
-        below = flat[K * b * b : (2 * K - 1) * b * b].reshape(K - 1, b, b)
-        return cls(diagonal, below, flat[(2 * K - 1) * b * b :].reshape(K, b), corner)
+        diagonal = flat[: layout.below_start].reshape(K, b, b) + np.eye(b) * layout.pad[:, :, None]
+        below = flat[layout.below_start : layout.column_start].reshape(K - 1, b, b)
+        return cls(diagonal, below, flat[layout.column_start :].reshape(K, b), corner)
 
     @classmethod
     def zeros(cls, layout: Layout) -> "Blocks":
