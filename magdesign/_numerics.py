@@ -78,6 +78,11 @@ ROUNDING_SPREAD = 1e-9
 # The most working memory (bytes, XLA's estimate for the compiled batch) a chunk may take;
 # a model that needs more per point gets smaller chunks.
 DESIGN_BATCH_MEMORY = 1 << 30
+# A model with loops of its own whose single solve takes longer than this (s) is swept a point
+# per call on parallel threads, not in vmapped batches whose lanes wait for the slowest: an
+# axisymmetric dome's design takes 0.6-0.9 s, a soft part's saturation solve at the Reissner
+# level well under a millisecond (batched, 17,000-19,000 solves/s).
+DESIGN_POINT_SECONDS = 0.02
 # Sequential quadratic programming (design solver). The objective is scaled to a unit
 # gradient at the start and the constraints to their targets, so multipliers are O(1)-O(100):
 # - the cost per unit of an elastic slack of the QP (a target or limit row relaxed where

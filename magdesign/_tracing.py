@@ -7,6 +7,7 @@ import gc
 import equinox as eqx
 import equinox._errors as _equinox_errors
 import jax
+from jax.extend.core import ClosedJaxpr, Jaxpr
 
 
 def traced_once(fn):
@@ -75,3 +76,23 @@ def gc_paused():
     finally:
         if enabled:
             gc.enable()
+
+
+def has_loops(fn, *args) -> bool:
+    """Whether ``fn(*args)`` runs a while loop (an iterative solve) anywhere in its trace:
+    in nested calls, branches, loops and custom derivatives' primal code too (not in a
+    custom derivative's rule, which a trace of ``fn`` alone does not run). ``args``:
+    arrays or ``jax.ShapeDtypeStruct``; ``fn`` is traced, not run."""
+
+    def loops_in(jaxpr):
+        for eqn in jaxpr.eqns:
+            if eqn.primitive.name == "while":
+                return True
+            for value in eqn.params.values():
+                for sub in value if isinstance(value, (tuple, list)) else (value,):
+                    inner = sub.jaxpr if isinstance(sub, ClosedJaxpr) else sub
+                    if isinstance(inner, Jaxpr) and loops_in(inner):
+                        return True
+        return False
+
+    return loops_in(jax.make_jaxpr(fn)(*args).jaxpr)

@@ -55,6 +55,7 @@ import functools
 import os
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import equinox as eqx
@@ -81,13 +82,14 @@ from magdesign._numerics import (
     DESIGN_HESSIAN_FLOOR,
     DESIGN_NULL_SPACE_RTOL,
     DESIGN_ON_CONSTRAINT,
+    DESIGN_POINT_SECONDS,
     DESIGN_POLISH_REACH,
     DESIGN_RTOL,
     DESIGN_START_NUDGE,
     TINY,
     safe_div,
 )
-from magdesign._tracing import compiler_options, gc_paused, traced_once
+from magdesign._tracing import compiler_options, gc_paused, has_loops, traced_once
 from magdesign.design._linear import LUOrSVD
 from magdesign.design._qp import solve_qp, where_needed
 from magdesign.design.problem import Problem, per_problem
@@ -1078,11 +1080,16 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
     """Solve ``problem`` from each start y0 (points, n) for each theta (points, p): the
     flat :class:`CoreSolution` of numpy arrays and the wall time (s).
 
-    The points go in chunks of at most ``chunk`` (default DESIGN_CHUNK), so that memory
-    stays bounded, each chunk split over every local device (``jax.sharding``); under
-    ``jax.distributed`` (more than one process) each process solves its share of the
-    points and every process gets the whole result. ``progress``: True, False, or None
-    (a bar when stderr is a terminal and the batch takes more than a second).
+    On a CPU, a problem whose model runs loops of its own (an iterative solve, such as an
+    axisymmetric dome's path: :func:`_iterative`) and whose first point takes longer than
+    DESIGN_POINT_SECONDS to solve is solved a point per call of the program that
+    :func:`solve` compiles, on parallel threads (:func:`_one_by_one`). Any other goes in
+    chunks of at most ``chunk`` points (default DESIGN_CHUNK), so that memory stays
+    bounded, each chunk vmapped and split over every local device (``jax.sharding``;
+    :func:`_in_chunks`). Under ``jax.distributed`` (more than one process) each process
+    solves its share of the points and every process gets the whole result.
+    ``progress``: True, False, or None (a bar when stderr is a terminal and the batch
+    takes more than a second).
     """
     began = time.perf_counter()
     count = thetas.shape[0]
@@ -1090,6 +1097,71 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
     share = -(-count // processes)
     mine = slice(index * share, min((index + 1) * share, count))
     y0, thetas = np.asarray(y0, np.float64)[mine], np.asarray(thetas, np.float64)[mine]
+    key, arrays = _structure(problem, settings)
+    bar = tqdm(total=share, unit="design", delay=1.0, disable=None if progress is None else not progress,
+               file=sys.stderr, leave=False) if index == 0 else None
+    packed = None
+    if len(y0) and jax.default_backend() == "cpu" and _iterative(problem):
+        with _errors_as_nan(), gc_paused():
+            program = _compiled(key, False).lower(arrays, y0[0], thetas[0]).compile()
+        first_began = time.perf_counter()
+        first = np.asarray(program(arrays, y0[0], thetas[0]))
+        if time.perf_counter() - first_began > DESIGN_POINT_SECONDS:
+            packed = _one_by_one(program, arrays, first, y0, thetas, bar)
+    if packed is None:
+        packed = _in_chunks(key, arrays, y0, thetas, share, chunk, bar)
+    if bar is not None:
+        bar.close()
+    if processes > 1:
+        with _stdout_to_stderr():  # gloo announces its connections on stdout (fd 1)
+            packed = multihost_utils.process_allgather(_padded(packed, share), tiled=True)[:count]
+    return _unpack(problem, packed), time.perf_counter() - began
+
+
+@per_problem
+def _iterative(problem):
+    """Whether the problem's model runs while loops of its own (an iterative solve, such
+    as an axisymmetric dome's path), read from one trace of its values."""
+    host = _host(problem)
+    shapes = [jax.ShapeDtypeStruct(np.shape(a), jnp.float64) for a in (host.y0, host.theta)]
+    with _errors_as_nan():
+        return has_loops(functools.partial(_values, problem), *shapes)
+
+
+def usable_cores():
+    """The number of CPU cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def _one_by_one(program, arrays, first, y0, thetas, bar):
+    """The packed solutions (points, width) of the points (y0, thetas), ``first`` that of
+    the first point, solved a point per call of ``program`` (:func:`solve`'s, compiled)
+    on a thread per usable core, fewer where their working memory together would pass
+    DESIGN_BATCH_MEMORY.
+
+    Vmapped lanes run in lock-step: every loop of a batched program turns until its
+    slowest lane is done, at each level of the nested loops of a dome's path solve. A
+    batch of 20 axisymmetric default designs took 27 s, twice the 13 s of its points
+    solved one after another, and 2 threads solve them in 7.3 s (2-core development
+    machine, 2026-11-28; scratch scripts timing the solver's parts). A call releases the
+    interpreter while it runs, so the threads run their points side by side."""
+    memory = program.memory_analysis()
+    per_point = None if memory is None else memory.temp_size_in_bytes
+    workers = usable_cores() if not per_point else min(usable_cores(), max(1, DESIGN_BATCH_MEMORY // per_point))
+    packed = [first]
+    if bar is not None:
+        bar.update(1)
+    with ThreadPoolExecutor(max(1, min(workers, len(y0) - 1))) as pool:
+        for result in pool.map(lambda i: np.asarray(program(arrays, y0[i], thetas[i])), range(1, len(y0))):
+            packed.append(result)
+            if bar is not None:
+                bar.update(1)
+    return np.stack(packed)
+
+
+def _in_chunks(key, arrays, y0, thetas, share, chunk, bar):
+    """The packed solutions (points, width) of the points (y0, thetas) in vmapped chunks,
+    each split over every local device (see :func:`solve_batch`)."""
     devices = jax.local_devices()
     # equal chunks, each a multiple of the device count: one compiled shape, little padding
     # (a batch that fits one chunk is padded to a power of two, so that sweeps of nearby
@@ -1098,11 +1170,8 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
     size = min(1 << max(share - 1, 0).bit_length(), limit) if share <= limit else -(-share // -(-share // limit))
     size = -(-size // len(devices)) * len(devices)
     sharding = NamedSharding(Mesh(np.array(devices), ("points",)), PartitionSpec("points")) if len(devices) > 1 else None
-    key, arrays = _structure(problem, settings)
     run, size = _batch_program(key, arrays, size, y0.shape[1], thetas.shape[1], sharding)
     packed = []
-    bar = tqdm(total=share, unit="design", delay=1.0, disable=None if progress is None else not progress,
-               file=sys.stderr, leave=False) if index == 0 else None
     for start in range(0, max(share, 1), size):
         part = [_padded(a[start : start + size], size) for a in (y0, thetas)]
         if sharding is not None:
@@ -1110,13 +1179,7 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
         packed.append(np.asarray(run(arrays, *part))[: max(0, min(size, y0.shape[0] - start))])
         if bar is not None:
             bar.update(packed[-1].shape[0])
-    if bar is not None:
-        bar.close()
-    packed = np.concatenate(packed)
-    if processes > 1:
-        with _stdout_to_stderr():  # gloo announces its connections on stdout (fd 1)
-            packed = multihost_utils.process_allgather(_padded(packed, share), tiled=True)[:count]
-    return _unpack(problem, packed), time.perf_counter() - began
+    return np.concatenate(packed)
 
 
 _PROGRAMS = {}  # (structure, chunk size, columns, devices) -> compiled batch program

@@ -80,7 +80,8 @@ def sweep(
     over_units: dict | None = None,
 ) -> DesignSweep:
     """Solve ``problem`` at every point of a grid (or list) of its inputs, in compiled,
-    chunked batches split over the local devices (see :func:`~magdesign.design.solve.solve_batch`).
+    chunked batches split over the local devices, or, for a model with slow loops of its own
+    on a CPU, a point per call on a thread per core (see :func:`~magdesign.design.solve.solve_batch`).
 
     Args:
         problem: the design problem.
@@ -90,7 +91,8 @@ def sweep(
             length) taken together, point by point, shape (k,).
         start, rtol, atol, max_steps: as in :func:`~magdesign.design.solve`; one start for
             every point.
-        chunk: the most points per compiled batch (memory); default DESIGN_CHUNK.
+        chunk: the most points per compiled batch (memory); default DESIGN_CHUNK. Not
+            used where the points go one at a time.
         progress: a progress bar: True, False, or None (when stderr is a terminal and the
             sweep takes more than a second).
         over_units: display units of the swept keys, for tables.

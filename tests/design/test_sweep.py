@@ -2,11 +2,14 @@
 finite differences; the `magdesign sweep` command, its bad input, devices and processes."""
 
 import csv
+import importlib
 import json
 import socket
 import subprocess
 import sys
 
+import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -15,6 +18,8 @@ from scipy.optimize import brentq
 from magdesign.cli import main
 from magdesign.design import Problem, Target, Variable, solve, sweep
 from magdesign.design.spec import default_spec, load_spec, problem_from_spec
+
+solver = importlib.import_module("magdesign.design.solve")
 
 mm, mT = 1e-3, 1e-3
 
@@ -115,6 +120,57 @@ def test_list_of_points_and_small_chunks_agree_with_one_batch():
     chunked = sweep(product_problem(), points, grid=False, chunk=3)  # 3 + 3 + 1 padded to 3
     np.testing.assert_array_equal(chunked.parameters["x"], listed.parameters["x"])
     assert list(chunked.status) == list(listed.status)
+
+
+def cubic_problem():
+    """x solves x^3 + a x = b by Newton's method in a loop of the model's own, and b is
+    free: the optimum for a target X on x is b = X^3 + a X, with db/dX = 3 X^2 + a and
+    db/da = X."""
+
+    def model(v):
+        a, b = v["a"], v["b"]
+
+        def newton(carry):
+            x, k = carry
+            return x - (x**3 + a * x - b) / (3 * x**2 + a), k + 1
+
+        def unsettled(carry):  # two steps at least: JAX differentiates the iterates
+            x, k = carry
+            return (k < 2) | (jnp.abs(x**3 + a * x - b) > 1e-14 * (1 + jnp.abs(b))) & (k < 50)
+
+        x, _ = jax.lax.while_loop(unsettled, newton, (b / (1 + a), 0))
+        return {"x": x}
+
+    return Problem(model, [Variable("b", 0.0, 100.0, 1.0)], targets=[Target("x", 1.0)], fixed={"a": 2.0})
+
+
+@pytest.mark.skipif(jax.default_backend() != "cpu", reason="models with loops go a point at a time on a CPU only")
+@pytest.mark.parametrize("slow", [True, False])
+def test_a_model_with_loops_is_swept_a_point_at_a_time_where_a_point_is_slow(monkeypatch, slow):
+    """Vmapped lanes of a loop wait for the slowest lane, so a model with loops of its own
+    whose point takes longer than DESIGN_POINT_SECONDS (here made 0 or infinite) is swept a
+    point per call of the program that solve runs: each point is then its single solve
+    exactly. Either way the optimum and its derivatives are the closed form's."""
+    assert solver._iterative(cubic_problem()) and not solver._iterative(product_problem())
+    monkeypatch.setattr(solver, "DESIGN_POINT_SECONDS", 0.0 if slow else np.inf)
+    calls = []
+    one_by_one = solver._one_by_one
+    monkeypatch.setattr(solver, "_one_by_one", lambda *args: calls.append(1) or one_by_one(*args))
+    targets, factors = np.linspace(0.5, 2.0, 4), np.array([1.0, 3.0])
+    result = sweep(cubic_problem(), {"x": targets, "a": factors})
+    assert len(calls) == int(slow)
+    assert result.shape == (4, 2) and result.successful.all()
+    x, a = np.meshgrid(targets, factors, indexing="ij")
+    np.testing.assert_allclose(result.parameters["b"], x**3 + a * x, rtol=1e-10)
+    np.testing.assert_allclose(result.derivatives["x"]["b"], 3 * x**2 + a, rtol=1e-9)
+    np.testing.assert_allclose(result.derivatives["a"]["b"], x, rtol=1e-9)
+    if slow:
+        for i, j in [(0, 0), (2, 1), (3, 1)]:
+            problem = eqx.tree_at(lambda p: (p.targets[0].value, p.fixed_values[0]), cubic_problem(),
+                                  (jnp.asarray(targets[i]), jnp.asarray(factors[j])))
+            single = solve(problem)
+            assert single.parameters["b"] == result.parameters["b"][i, j]
+            assert single.derivatives["x"]["b"] == result.derivatives["x"]["b"][i, j]
 
 
 def test_bad_keys_name_the_key():
