@@ -41,8 +41,9 @@ to its target or limit. It has two stages:
    conditioned, else an SVD, whose minimum-norm step handles rank-deficient Jacobians
    (degenerate active sets, manifolds of solutions). The optimum's implicit derivatives
    (forward mode, with respect to the target values, limit bounds and fixed inputs) are
-   those of ``optimistix.ImplicitAdjoint`` at the polished root, the root find's own
-   adjoint, asked at the root (:func:`_implicit_derivatives`).
+   those of ``optimistix.ImplicitAdjoint``, the root find's own adjoint, asked at the
+   polished root with the model's jet from the polish's last evaluation there
+   (:func:`_implicit_derivatives`).
 
 Everything after the Python-level unpacking is one jitted, vmappable function of a fixed
 problem structure; the outcome is a :class:`DesignStatus`, never an exception. The search
@@ -169,6 +170,12 @@ def _evaluate(problem: Problem, y, theta):
     missing = [name for name in problem.outputs if name not in outputs]
     if missing:
         raise ValueError(f"{missing[0]}: not an output of the model (outputs: {sorted(outputs)})")
+    return outputs, *_scaled_rows(problem, outputs, theta)
+
+
+def _scaled_rows(problem: Problem, outputs, theta):
+    """(c, f): the scaled constraint rows and the objective from the model's ``outputs``
+    {name: value (SI)} and theta's target values and limit bounds."""
     n_targets = len(problem.targets)
     rows = [(outputs[t.output] - theta[k]) / t.scale for k, t in enumerate(problem.targets)]
     for k, (i, side) in enumerate(problem.limit_rows):
@@ -185,7 +192,7 @@ def _evaluate(problem: Problem, y, theta):
         f = jnp.zeros(())
     else:
         f = (1.0 if objective.sense == "min" else -1.0) * objective.weight * outputs[objective.output]
-    return outputs, c, f
+    return c, f
 
 
 class Jet(eqx.Module):
@@ -642,8 +649,9 @@ class _KKT(eqx.Module):
     """The KKT residual of an active set (the polish's equations with an objective): at
     z = (y, multipliers), stationarity of the Lagrangian on the free variables, the
     fixed variables' distance to their bound, the targets and active limit rows, and the
-    inactive rows' multipliers. Called as ``kkt(z, theta)`` -> (residual, (outputs, c)),
-    with the residual's derivative in z from the model's Hessians (:func:`_kkt_residual`)."""
+    inactive rows' multipliers. Called as ``kkt(z, theta)`` -> (residual, the model's
+    :class:`Jet` at y), with the residual's derivative in z from the model's Hessians
+    (:func:`_residual`)."""
 
     problem: Problem
     weight: Float[Array, ""]
@@ -651,79 +659,79 @@ class _KKT(eqx.Module):
     equations: Bool[Array, " m"]
     y_max: Float[Array, " n"]
 
-    def rows(self, y, lam, J, c):
-        """The residual from the model's rows c and their Jacobian J (with the objective's)."""
-        stationarity = self.weight * J[0] + J[1:].T @ lam
+    def rows(self, z, jet):
+        """The residual at z from the model's rows and their Jacobian (with the objective's) in ``jet``."""
+        n = self.y_max.shape[0]
+        y, lam = z[:n], z[n:]
+        stationarity = self.weight * jet.J[0] + jet.J[1:].T @ lam
         r_y = jnp.where(self.active.fixed, self.active.fixed_residual(y, self.y_max), stationarity)
-        return jnp.concatenate([r_y, jnp.where(self.equations, c, lam)])
+        return jnp.concatenate([r_y, jnp.where(self.equations, jet.v[1:], lam)])
 
-    def tangent(self, jet, lam, dy, dlam):
-        """(n + m,) the residual's derivative along (dy (n,), dlam (m,)) in z at a point
-        with the model's :class:`Jet` ``jet`` and multipliers ``lam`` (m,)."""
+    def tangent(self, jet, z, dz):
+        """(n + m,) the residual's derivative along dz (n + m,) at z, where the model's
+        :class:`Jet` is ``jet``."""
+        n = self.y_max.shape[0]
+        lam, dy, dlam = z[n:], dz[:n], dz[n:]
         d_stationarity = _lagrangian_hessian(jet, lam, self.weight) @ dy + jet.J[1:].T @ dlam
         return jnp.concatenate([jnp.where(self.active.fixed, dy, d_stationarity), jnp.where(self.equations, jet.J[1:] @ dy, dlam)])
 
     def newton_step(self, z, jet, linear_solver):
         """(n + m,) z (n + m,) less Newton's step from z, where the model's :class:`Jet`
         is ``jet``: the step that optimistix's Newton takes from z with ``linear_solver``."""
-        n = self.y_max.shape[0]
-        y, lam = z[:n], z[n:]
-        jacobian = jax.vmap(lambda dz: self.tangent(jet, lam, dz[:n], dz[n:]), out_axes=1)(jnp.eye(z.shape[0]))
-        residual = self.rows(y, lam, jet.J, jet.v[1:])
-        return z - lx.linear_solve(lx.MatrixLinearOperator(jacobian), residual, linear_solver, throw=False).value
+        jacobian = jax.vmap(lambda dz: self.tangent(jet, z, dz), out_axes=1)(jnp.eye(z.shape[0]))
+        return z - lx.linear_solve(lx.MatrixLinearOperator(jacobian), self.rows(z, jet), linear_solver, throw=False).value
 
     def __call__(self, z, theta):
-        return _kkt_residual(z, theta, kkt=self)
-
-    def evaluate(self, z, theta):
-        """(residual, (outputs, c)) at z, differentiated by JAX as written."""
-        n = self.y_max.shape[0]
-        J, (v, outputs) = _first_jet(self.problem, z[:n], theta)
-        return self.rows(z[:n], z[n:], J, v[1:]), (outputs, v[1:])
-
-
-# The residual's derivative in z from the model's Hessians (n tangents through the model,
-# as in the search's jet), where jax.jacfwd would push all n + m directions of z through
-# the model's second derivatives (2 against 6 on the default design). Tangents in theta
-# (the implicit derivatives' right-hand side) go through the plain residual. The aux
-# (outputs, c) rides along so that the polish reads them from its last evaluation; it is
-# never differentiated, and its tangent is zero.
-@eqx.filter_custom_jvp
-def _kkt_residual(z, theta, *, kkt: _KKT):
-    return kkt.evaluate(z, theta)
-
-
-@_kkt_residual.def_jvp
-def _kkt_residual_jvp(primals, tangents, *, kkt: _KKT):
-    (z, theta), (dz, dtheta) = primals, tangents
-    if dz is None:
-        out, (dr, _) = jax.jvp(lambda theta: kkt.evaluate(z, theta), (theta,), (dtheta,))
-        return out, (dr, jax.tree.map(jnp.zeros_like, out[1]))
-    n = kkt.y_max.shape[0]
-    y, lam, dy, dlam = z[:n], z[n:], dz[:n], dz[n:]
-    jet = _jet(kkt.problem, y, theta)
-    dr = kkt.tangent(jet, lam, dy, dlam)
-    if dtheta is not None:
-        dr = dr + jax.jvp(lambda theta: kkt.evaluate(z, theta)[0], (theta,), (dtheta,))[1]
-    aux = (jet.outputs, jet.v[1:])
-    return (kkt.rows(y, lam, jet.J, jet.v[1:]), aux), (dr, jax.tree.map(jnp.zeros_like, aux))
+        return _residual(z, theta, equations=self)
 
 
 class _Feasibility(eqx.Module):
     """The polish's equations without an objective: the targets and active limit rows,
     and the fixed variables' distance to their bound. Called as ``equations(y, theta)``
-    -> (residual, (outputs, c))."""
+    -> (residual, the model's :class:`Jet` at y, without Hessians)."""
 
     problem: Problem
     active: _Active
     equations: Bool[Array, " m"]
     y_max: Float[Array, " n"]
 
+    def rows(self, y, jet):
+        return jnp.concatenate([jnp.where(self.equations, jet.v[1:], 0.0), self.active.fixed_residual(y, self.y_max)])
+
+    def tangent(self, jet, y, dy):
+        return jnp.concatenate([jnp.where(self.equations, jet.J[1:] @ dy, 0.0), jnp.where(self.active.fixed, dy, 0.0)])
+
     def __call__(self, y, theta):
-        v, outputs = _values(self.problem, y, theta)
-        c = v[1:]
-        r = jnp.concatenate([jnp.where(self.equations, c, 0.0), self.active.fixed_residual(y, self.y_max)])
-        return r, (outputs, c)
+        return _residual(y, theta, equations=self)
+
+
+# The polish's residual, with its derivative in z from the model's jet (n tangents through
+# the model), where jax.jacfwd would push every direction of z through the model (for
+# the KKT residual, its second derivatives: n + m directions, 6 against 2 on the default
+# design). The jet rides along as the aux, so that the polish hands the model's values
+# and derivatives at its last point to the implicit derivatives (:func:`_linearised`);
+# it is never differentiated, and its tangent is zero. Tangents in theta (not taken by
+# the solver) go through the model's first derivatives.
+@eqx.filter_custom_jvp
+def _residual(z, theta, *, equations):
+    jet = _jet(equations.problem, z[: equations.y_max.shape[0]], theta)
+    return equations.rows(z, jet), jet
+
+
+@_residual.def_jvp
+def _residual_jvp(primals, tangents, *, equations):
+    (z, theta), (dz, dtheta) = primals, tangents
+    out = _residual(z, theta, equations=equations)
+    dr = jnp.zeros_like(out[0]) if dz is None else equations.tangent(out[1], z, dz)
+    if dtheta is not None:
+        dr = dr + jax.jvp(lambda theta: equations.rows(z, _first_order_jet(equations.problem, z, theta)), (theta,), (dtheta,))[1]
+    return out, (dr, jax.tree.map(jnp.zeros_like, out[1]))
+
+
+def _first_order_jet(problem, z, theta):
+    """The model's :class:`Jet` at y = z[:n] without Hessians (zero), for derivatives in theta."""
+    J, (v, outputs) = _first_jet(problem, z[: len(problem.variables)], theta)
+    return Jet(v, J, jnp.zeros((*J.shape, J.shape[1])), outputs)
 
 
 # optimistix's implicit adjoint, with the polish's linear solver: the root find's, and
@@ -731,21 +739,24 @@ class _Feasibility(eqx.Module):
 _ADJOINT = optx.ImplicitAdjoint(linear_solver=LUOrSVD())
 
 
-def _implicit_derivatives(equations, root, theta, usable):
-    """(len(root), p) d root / d theta at a ``root`` of ``equations(z, theta)`` = (0, aux):
-    the tangents that optimistix's implicit adjoint gives a root find's answer, asked of
-    it at the root apart from the root find. Forward mode through the root find itself
-    (jacfwd of the polish) traced its whole loop under JAX's jvp and vmap, and with it the
-    model: 0.2 s of the default design's 1.1 s trace, 3 s of the axisymmetric one's 17 s.
+def _implicit_derivatives(equations, z, jet, theta, usable):
+    """(len(z), p) d z / d theta at a root z of ``equations(z, theta)`` = (0, jet), where
+    the model's :class:`Jet` is ``jet`` (the polish's last): the tangents that
+    optimistix's implicit adjoint gives a root find's answer, asked of it at the root
+    apart from the root find, of the equations to first order about z
+    (:func:`_linearised`), so that the model is not evaluated again, nor traced again,
+    unless it depends on theta (fixed inputs). Forward mode through the root find itself
+    (jacfwd of the polish) traced its whole loop under JAX's jvp and vmap, and with it
+    the model.
 
-    ``usable``: False where the root or the equations there are not finite. The equations
+    ``usable``: False where z or the equations there are not finite. The equations
     are then zero (so are the derivatives, which the caller masks): lineax checks the
     implicit solve's answer with an equinox error, which, traced as NaN (see
     :func:`_errors_as_nan`), turned every member of a vmapped batch to NaN as soon as one
     member's answer was not finite, the derivatives of a sweep's good points with it."""
 
     def root_of(theta):
-        return _ADJOINT.apply(_given_root, _equations_at, (equations, theta, root, usable), frozenset())[0]
+        return _ADJOINT.apply(_given_root, _linearised, (equations, theta, z, jet, usable), frozenset())[0]
 
     return jax.jacfwd(root_of)(theta)
 
@@ -754,28 +765,36 @@ def _given_root(inputs):
     return inputs[2], None
 
 
-def _equations_at(root, _, inputs):
-    equations, theta, _, usable = inputs[:4]
-    return jnp.where(usable, equations(root, theta)[0], 0.0)
+def _linearised(root, _, inputs):
+    """The equations to first order in the root about z: exact derivatives at z, in the
+    root from the jet there, in theta from the targets' and limits' bounds (and, where
+    the model has fixed inputs, from the model's first derivatives in them)."""
+    equations, theta, z, jet, usable = inputs[:5]
+    problem = equations.problem
+    if problem.fixed_names:
+        at_theta = _first_order_jet(problem, z, theta)
+    else:
+        c, _ = _scaled_rows(problem, dict(zip(problem.outputs, jet.outputs)), theta)
+        at_theta = eqx.tree_at(lambda j: j.v, jet, jnp.concatenate([jet.v[:1], c]))
+    return jnp.where(usable, equations.rows(z, at_theta) + equations.tangent(jet, z, root - z), 0.0)
 
 
 def _last_evaluated(solution):
-    """(z, largest residual entry, aux) at the last point where optimistix's Newton
-    evaluated the equations: its answer plus its last step (solution.state.diff, taken
-    from that point). Its residual and aux come with the solve, where evaluating them at
-    the answer would cost one more evaluation of the model; Newton stops when that step
-    is below its tolerances (a tenth of the design's), and the answer's derivatives are
-    those of the root."""
+    """(z, largest residual entry, the model's jet) at the last point where optimistix's
+    Newton evaluated the equations: its answer plus its last step (solution.state.diff,
+    taken from that point). Its residual and jet come with the solve, where evaluating
+    them at the answer would cost one more evaluation of the model; Newton stops when
+    that step is below its tolerances (a tenth of the design's)."""
     z = solution.value + jax.lax.stop_gradient(solution.state.diff)
     return z, jnp.max(jnp.abs(solution.state.f), initial=0.0), solution.aux
 
 
 def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, settings: Settings, y_max, jet=None):
     """The exact solution of the active set's equations near (y, multipliers), by
-    optimistix (see the module docstring). Returns (y, multipliers, residual, aux,
-    (equations, root)) with ``residual`` the largest entry of the KKT (or feasibility)
-    residual, ``aux`` = (outputs, c) at the polished point, and the equations that
-    optimistix solved with their root, for :func:`_implicit_derivatives`. ``jet``:
+    optimistix (see the module docstring). Returns (y, multipliers, residual, polished,
+    (equations, z)) with ``residual`` the largest entry of the KKT (or feasibility)
+    residual, ``polished`` the model's :class:`Jet` at the polished point, and the equations
+    that optimistix solved with their unknowns z there, for :func:`_implicit_derivatives`. ``jet``:
     None, or the model's :class:`Jet` at y, already evaluated (the search's; NaN where
     the search accepted no point), from which a problem with an objective takes Newton's
     first step before optimistix takes over, where optimistix would have evaluated the
@@ -801,8 +820,8 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
             equations_of, optx.Newton(**solver_options), y, theta, has_aux=True,
             max_steps=settings.max_steps, adjoint=_ADJOINT, throw=False,
         )
-        y, residual, aux = _last_evaluated(solution)
-        return y, jnp.zeros_like(multipliers), residual, aux, (equations_of, solution.value)
+        y, residual, jet = _last_evaluated(solution)
+        return y, jnp.zeros_like(multipliers), residual, jet, (equations_of, y)
 
     kkt = _KKT(problem, weight, active, equations, y_max)
     z0 = jnp.concatenate([y, jnp.where(equations, multipliers, 0.0)])
@@ -813,8 +832,8 @@ def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, se
         kkt, optx.Newton(**solver_options), z0, theta, has_aux=True,
         max_steps=settings.max_steps, adjoint=_ADJOINT, throw=False,
     )
-    z, residual, aux = _last_evaluated(solution)
-    return z[:n], z[n:], residual, aux, (kkt, solution.value)
+    z, residual, jet = _last_evaluated(solution)
+    return z[:n], z[n:], residual, jet, (kkt, z)
 
 
 def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
@@ -833,11 +852,13 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     accepted = (search.phase != START) & (search.phase != NONFINITE_START)
     jet = jax.tree.map(lambda a: jnp.where(accepted, a, jnp.nan), jax.lax.stop_gradient(search.jet))
 
-    y, multipliers, residual, (outputs, c), (equations, root) = _polish(
+    y, multipliers, residual, polished, (equations, z) = _polish(
         problem, y_start, multipliers_start, theta, active, search.weight, settings, y_max, jet
     )
-    usable = jnp.all(jnp.isfinite(root)) & jnp.isfinite(residual)
-    dy = _implicit_derivatives(equations, root, theta, usable)[:n] if theta.shape[0] else jnp.zeros((n, 0))
+    usable = jnp.isfinite(residual) & jnp.all(jnp.isfinite(z))
+    usable = usable & jnp.all(jnp.isfinite(polished.J)) & jnp.all(jnp.isfinite(polished.H))
+    dy = _implicit_derivatives(equations, z, polished, theta, usable)[:n] if theta.shape[0] else jnp.zeros((n, 0))
+    outputs, c = polished.outputs, polished.v[1:]
     # The polish refines the search's point; one that ends outside the box or far away
     # found another solution of the equations, and the search's point stands.
     kept = (

@@ -31,9 +31,12 @@ def test_where_needed_under_vmap_computes_only_the_needed_lanes():
     assert qp.where_needed(jnp.asarray(False), lambda a: a + 1.0, jnp.asarray(2.0), jnp.asarray(7.0)) == 7.0
 
 
-def test_kkt_residual_derivatives_match_plain_forward_mode():
+@pytest.mark.parametrize("objective", [True, False])
+def test_polish_residual_derivatives_match_plain_forward_mode(objective):
     """A model with curvature in both variables and a fixed input (theta) inside it, with
-    one variable on a bound, one limit row held and one not."""
+    one variable on a bound, one limit row held and one not: the KKT residual (with an
+    objective) and the feasibility residual (without), whose derivatives in z come from
+    the model's jet and in theta from its first derivatives."""
 
     def model(v):
         a = v["a"]
@@ -41,25 +44,31 @@ def test_kkt_residual_derivatives_match_plain_forward_mode():
 
     problem = Problem(
         model, [Variable("x", -2.0, 2.0), Variable("y", -2.0, 2.0)], targets=[Target("g", 1.5)],
-        limits=[Limit("h", upper=0.5), Limit("f", lower=-3.0)], objective=Objective("f", "min"), fixed={"a": 1.3},
+        limits=[Limit("h", upper=0.5), Limit("f", lower=-3.0)], objective=Objective("f", "min") if objective else None,
+        fixed={"a": 1.3},
     )
     theta = jnp.asarray(solver.problem_arrays(problem, np)[4])
     active = solver._Active(jnp.array([True, False]), jnp.array([False, False]), jnp.array([False, True]))
-    kkt = solver._KKT(problem, jnp.asarray(0.7), active, jnp.array([True, True, False]), jnp.array([1.0, 1.0]))
-    z = jnp.array([0.3, 0.6, 0.4, -0.2, 0.9])
+    held, y_max = jnp.array([True, True, False]), jnp.array([1.0, 1.0])
+    if objective:
+        equations = solver._KKT(problem, jnp.asarray(0.7), active, held, y_max)
+        z = jnp.array([0.3, 0.6, 0.4, -0.2, 0.9])
+    else:
+        equations = solver._Feasibility(problem, active, held, y_max)
+        z = jnp.array([0.3, 0.6])
 
     def plain(z, theta):
-        return kkt.evaluate(z, theta)[0]
+        return equations.rows(z, solver._first_order_jet(problem, z, theta))
 
     def custom(z, theta):
-        return solver._kkt_residual(z, theta, kkt=kkt)[0]
+        return equations(z, theta)[0]
 
-    # the aux (outputs, c) rides along unchanged, with a zero tangent, from both branches
-    # of the rule: a tangent in z, and one in theta only
-    along_z = jax.jvp(lambda z: solver._kkt_residual(z, theta, kkt=kkt), (z,), (jnp.ones_like(z),))
-    along_theta = jax.jvp(lambda theta: solver._kkt_residual(z, theta, kkt=kkt), (theta,), (jnp.ones_like(theta),))
+    # the model's jet rides along unchanged, with a zero tangent, whatever is differentiated
+    jet = solver._jet(problem, z[:2], theta)
+    along_z = jax.jvp(lambda z: equations(z, theta), (z,), (jnp.ones_like(z),))
+    along_theta = jax.jvp(lambda theta: equations(z, theta), (theta,), (jnp.ones_like(theta),))
     for (_, aux), (_, aux_dot) in (along_z, along_theta):
-        for got, expected in zip(jax.tree.leaves(aux), jax.tree.leaves(kkt(z, theta)[1])):
+        for got, expected in zip(jax.tree.leaves(aux), jax.tree.leaves(jet)):
             np.testing.assert_allclose(got, expected, rtol=1e-15)
         assert all(np.all(np.asarray(leaf) == 0.0) for leaf in jax.tree.leaves(aux_dot))
 
@@ -72,18 +81,21 @@ def test_kkt_residual_derivatives_match_plain_forward_mode():
     dz, dtheta = jnp.linspace(-1.0, 1.0, z.size), jnp.linspace(0.5, -0.5, theta.size)
     np.testing.assert_allclose(jax.jvp(custom, (z, theta), (dz, dtheta))[1], jax.jvp(plain, (z, theta), (dz, dtheta))[1],
                                rtol=1e-13, atol=1e-13)
+    if not objective:
+        return
     # Newton's first step of the polish, from the model's jet, against numpy's minimum-norm
     # solve with the plain residual's forward-mode Jacobian (singular at this point).
     expected = z - np.linalg.pinv(jax.jacfwd(plain)(z, theta), rcond=1e-12) @ plain(z, theta)
-    got = kkt.newton_step(z, solver._jet(problem, z[:2], theta), LUOrSVD())
+    got = equations.newton_step(z, jet, LUOrSVD())
     np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
 
 
-def test_polish_returns_the_residual_and_outputs_of_the_point_it_returns():
-    """The polish reads its residual and outputs from optimistix's last evaluation (Newton's
-    state and aux) instead of evaluating the model again; they must belong to the point it
-    returns. Cut to two Newton steps from a start off the root, so that the last step is
-    large and a residual or aux from another point would show."""
+def test_polish_returns_the_residual_and_jet_of_the_point_it_returns():
+    """The polish reads its residual and the model's jet (which the implicit derivatives
+    use) from optimistix's last evaluation (Newton's state and aux) instead of evaluating
+    the model again; they must belong to the point it returns. Cut to two Newton steps
+    from a start off the root, so that the last step is large and a residual or jet from
+    another point would show."""
     problem = Problem(
         lambda v: {"f": v["x"] + 2.0 * v["y"], "r2": v["x"] ** 2 + v["y"] ** 2},
         [Variable("x", -3.0, 3.0), Variable("y", -3.0, 3.0)], targets=[Target("r2", 2.0)], objective=Objective("f", "min"),
@@ -95,17 +107,28 @@ def test_polish_returns_the_residual_and_outputs_of_the_point_it_returns():
     no_bounds = solver._Active(jnp.zeros(0, bool), jnp.zeros(2, bool), jnp.zeros(2, bool))
     for p in (problem, feasibility):
         weight = jnp.asarray(1.0 if p.objective is not None else 0.0)
-        y, lam, residual, (outputs, c), _ = solver._polish(p, y0, jnp.array([0.5]), theta, no_bounds, weight, settings, y_max)
+        y, lam, residual, jet, _ = solver._polish(p, y0, jnp.array([0.5]), theta, no_bounds, weight, settings, y_max)
+        # the model at y, by plain forward mode
+        v, outputs = solver._values(p, y, theta)
+        J = jax.jacfwd(lambda y: solver._values(p, y, theta)[0])(y)
+        x = -3.0 + 6.0 * y
         if p.objective is not None:
-            kkt = solver._KKT(p, weight, no_bounds, jnp.array([True]), y_max)
-            r, (expected_outputs, expected_c) = kkt(jnp.concatenate([y, lam]), theta)
+            stationarity = weight * J[0] + J[1:].T @ lam
+            r = jnp.concatenate([stationarity, v[1:]])
+            # f = x + 2 y has no curvature; r2 = x^2 + y^2 in scaled variables: 72 I / 2 (target scale 2)
+            np.testing.assert_allclose(jet.H[0], 0.0, atol=1e-12)
+            np.testing.assert_allclose(jet.H[1], 36.0 * np.eye(2), rtol=1e-12)
         else:
-            v, expected_outputs = solver._values(p, y, theta)
-            r = expected_c = v[1:]
+            r = v[1:]
         assert float(jnp.max(jnp.abs(r))) > 1e-9  # two steps from this start: not yet converged
         np.testing.assert_allclose(residual, jnp.max(jnp.abs(r)), rtol=1e-12)
-        np.testing.assert_allclose(outputs, expected_outputs, rtol=1e-14)
-        np.testing.assert_allclose(c, expected_c, rtol=1e-12)
+        np.testing.assert_allclose(jet.outputs, outputs, rtol=1e-14)
+        named = dict(zip(p.outputs, np.asarray(jet.outputs)))
+        np.testing.assert_allclose(named["r2"], x[0] ** 2 + x[1] ** 2, rtol=1e-14)
+        if p.objective is not None:
+            np.testing.assert_allclose(named["f"], x[0] + 2.0 * x[1], rtol=1e-14)
+        np.testing.assert_allclose(jet.v, v, rtol=1e-12)
+        np.testing.assert_allclose(jet.J, J, rtol=1e-12)
 
 
 def test_polish_starts_from_the_search_jet_without_evaluating_the_model_again(monkeypatch):
@@ -315,3 +338,33 @@ def test_a_model_traced_outside_the_solver_keeps_raising_its_errors_and_inside_g
         else:
             with pytest.raises(Exception, match="x above 0.5"):
                 jax.block_until_ready(solver._jet(problem, y0, theta))
+
+
+@pytest.mark.parametrize("fixed_input", [True, False])
+def test_implicit_derivatives_from_the_polished_jet_match_the_closed_form(fixed_input):
+    """The optimum's derivatives, from the polish's last jet (in the variables) and the
+    rows' dependence on theta (through the model where it has a fixed input).
+    With a fixed input a: minimise (x - sin a)^2 + 2 y^2 with x + y = t, whose optimum is
+    x = (2 t + sin a) / 3, y = (t - sin a) / 3: the derivatives in a need the model's mixed
+    derivative. Without: minimise (x - 2)^2 + (y - 1)^2 with x + y <= u active,
+    x = 2 - (3 - u) / 2, y = 1 - (3 - u) / 2."""
+    variables = [Variable("x", -3.0, 3.0, start=0.1), Variable("y", -3.0, 3.0, start=0.2)]
+    if fixed_input:
+        a, t = 0.7, 1.1
+        problem = Problem(lambda v: {"f": (v["x"] - jnp.sin(v["a"])) ** 2 + 2.0 * v["y"] ** 2, "s": v["x"] + v["y"]},
+                          variables, targets=[Target("s", t)], objective=Objective("f", "min"), fixed={"a": a})
+        expected = {"s": {"x": 2 / 3, "y": 1 / 3}, "a": {"x": np.cos(a) / 3, "y": -np.cos(a) / 3}}
+        optimum = {"x": (2 * t + np.sin(a)) / 3, "y": (t - np.sin(a)) / 3}
+    else:
+        u = 1.4
+        problem = Problem(lambda v: {"f": (v["x"] - 2.0) ** 2 + (v["y"] - 1.0) ** 2, "s": v["x"] + v["y"]},
+                          variables, limits=[Limit("s", upper=u)], objective=Objective("f", "min"))
+        expected = {"s.upper": {"x": 0.5, "y": 0.5}}
+        optimum = {"x": 2 - (3 - u) / 2, "y": 1 - (3 - u) / 2}
+    result = solve(problem)
+    assert result.status == "successful"
+    for name, value in optimum.items():
+        assert result.parameters[name] == pytest.approx(value, rel=1e-9)
+    for key, row in expected.items():
+        for name, value in row.items():
+            assert result.derivatives[key][name] == pytest.approx(value, rel=1e-9), (key, name)
