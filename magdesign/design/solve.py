@@ -75,6 +75,7 @@ from magdesign._numerics import (
     DESIGN_ACTIVE_MULTIPLIER,
     DESIGN_ATOL,
     DESIGN_BATCH_MEMORY,
+    DESIGN_CHAIN,
     DESIGN_CHUNK,
     DESIGN_CURVATURE_TOL,
     DESIGN_ELASTIC,
@@ -94,7 +95,7 @@ from magdesign._tracing import compiler_options, gc_paused, has_loops, traced_on
 from magdesign.design._linear import LUOrSVD
 from magdesign.design._qp import solve_qp, where_needed
 from magdesign.design.problem import Problem, per_problem
-from magdesign.design.report import DesignResult, DesignStatus, DesignSweep
+from magdesign.design.report import STATUS_NAMES, DesignResult, DesignStatus, DesignSweep
 
 # Armijo's sufficient-decrease fraction of the line search, and the shortest step it tries;
 # a decrease of the merit counts only above _ROUNDING times (1 + |merit|).
@@ -494,10 +495,12 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         # A stationary point whose curvature is too small to tell a minimum (x^3 at 0, a
         # ridge of -x^4), or which the steps approached only linearly (as they approach a
         # degenerate point, where at a minimum with curvature Newton's steps shrink
-        # quadratically), is probed on both sides before it is accepted.
-        linear = jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d))
+        # quadratically), is probed on both sides before it is accepted; a start that is
+        # stationary was approached by no steps. Without an objective there is no minimum
+        # to confirm, nor a direction to probe (every probe tried the point itself).
+        linear = (state.phase != START) & (jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d)))
         flat = (curvature <= DESIGN_FLAT_CURVATURE) | linear
-        probe = stationary & ~saddle & flat & (state.escapes < DESIGN_ESCAPES)
+        probe = stationary & ~saddle & flat & (state.escapes < DESIGN_ESCAPES) & (problem.objective is not None)
         phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)
         return eqx.tree_at(
             lambda s: (s.phase, s.y, s.jet, s.step, s.bound_multipliers, s.direction, s.correction, s.alpha, s.merit,
@@ -696,9 +699,11 @@ class _Feasibility(eqx.Module):
     y_max: Float[Array, " n"]
 
     def rows(self, y, jet):
+        """The residual at y from the model's rows in ``jet``."""
         return jnp.concatenate([jnp.where(self.equations, jet.v[1:], 0.0), self.active.fixed_residual(y, self.y_max)])
 
     def tangent(self, jet, y, dy):
+        """The residual's derivative along dy (n,) at y, where the model's :class:`Jet` is ``jet``."""
         return jnp.concatenate([jnp.where(self.equations, jet.J[1:] @ dy, 0.0), jnp.where(self.active.fixed, dy, 0.0)])
 
     def __call__(self, y, theta):
@@ -711,7 +716,7 @@ class _Feasibility(eqx.Module):
 # design). The jet rides along as the aux, so that the polish hands the model's values
 # and derivatives at its last point to the implicit derivatives (:func:`_linearised`);
 # it is never differentiated, and its tangent is zero. Tangents in theta (not taken by
-# the solver) go through the model's first derivatives.
+# the solver) go through :func:`_in_theta`.
 @eqx.filter_custom_jvp
 def _residual(z, theta, *, equations):
     jet = _jet(equations.problem, z[: equations.y_max.shape[0]], theta)
@@ -724,14 +729,25 @@ def _residual_jvp(primals, tangents, *, equations):
     out = _residual(z, theta, equations=equations)
     dr = jnp.zeros_like(out[0]) if dz is None else equations.tangent(out[1], z, dz)
     if dtheta is not None:
-        dr = dr + jax.jvp(lambda theta: equations.rows(z, _first_order_jet(equations.problem, z, theta)), (theta,), (dtheta,))[1]
+        dr = dr + jax.jvp(lambda theta: equations.rows(z, _in_theta(equations, z, out[1], theta)), (theta,), (dtheta,))[1]
     return out, (dr, jax.tree.map(jnp.zeros_like, out[1]))
 
 
-def _first_order_jet(problem, z, theta):
-    """The model's :class:`Jet` at y = z[:n] without Hessians (zero), for derivatives in theta."""
-    J, (v, outputs) = _first_jet(problem, z[: len(problem.variables)], theta)
-    return Jet(v, J, jnp.zeros((*J.shape, J.shape[1])), outputs)
+def _in_theta(equations, z, jet, theta):
+    """The model's :class:`Jet` ``jet`` at y = z[:n], with what the rows of ``equations``
+    read of it as functions of theta, for derivatives in theta: without fixed inputs
+    theta moves only the targets' and limits' bounds (the rows c, from the outputs); with
+    them it moves the model, whose values (and, for the KKT residual, first derivatives,
+    so that their derivative in theta is a mixed second derivative) are evaluated again."""
+    problem, n = equations.problem, len(equations.problem.variables)
+    if not problem.fixed_names:
+        c, _ = _scaled_rows(problem, dict(zip(problem.outputs, jet.outputs)), theta)
+        return eqx.tree_at(lambda j: j.v, jet, jnp.concatenate([jet.v[:1], c]))
+    if problem.objective is None:  # the feasibility rows read the values alone
+        v, outputs = _values(problem, z[:n], theta)
+        return eqx.tree_at(lambda j: (j.v, j.outputs), jet, (v, outputs))
+    J, (v, outputs) = _first_jet(problem, z[:n], theta)
+    return eqx.tree_at(lambda j: (j.v, j.J, j.outputs), jet, (v, J, outputs))
 
 
 # optimistix's implicit adjoint, with the polish's linear solver: the root find's, and
@@ -767,16 +783,10 @@ def _given_root(inputs):
 
 def _linearised(root, _, inputs):
     """The equations to first order in the root about z: exact derivatives at z, in the
-    root from the jet there, in theta from the targets' and limits' bounds (and, where
-    the model has fixed inputs, from the model's first derivatives in them)."""
+    root from the model's jet there, in theta from :func:`_in_theta`. (``inputs`` ends
+    with what optimistix's adjoint appends.)"""
     equations, theta, z, jet, usable = inputs[:5]
-    problem = equations.problem
-    if problem.fixed_names:
-        at_theta = _first_order_jet(problem, z, theta)
-    else:
-        c, _ = _scaled_rows(problem, dict(zip(problem.outputs, jet.outputs)), theta)
-        at_theta = eqx.tree_at(lambda j: j.v, jet, jnp.concatenate([jet.v[:1], c]))
-    return jnp.where(usable, equations.rows(z, at_theta) + equations.tangent(jet, z, root - z), 0.0)
+    return jnp.where(usable, equations.rows(z, _in_theta(equations, z, jet, theta)) + equations.tangent(jet, z, root - z), 0.0)
 
 
 def _last_evaluated(solution):
@@ -1097,7 +1107,7 @@ def solve(
     return DesignResult.from_core(problem, _unpack(problem, packed), host.arrays[4], seconds, settings.rtol)
 
 
-def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
+def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None, continuation=False):
     """Solve ``problem`` from each start y0 (points, n) for each theta (points, p): the
     flat :class:`CoreSolution` of numpy arrays and the wall time (s).
 
@@ -1110,7 +1120,8 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
     :func:`_in_chunks`). Under ``jax.distributed`` (more than one process) each process
     solves its share of the points and every process gets the whole result.
     ``progress``: True, False, or None (a bar when stderr is a terminal and the batch
-    takes more than a second).
+    takes more than a second). ``continuation``: where the points go one at a time, start
+    points from their predecessor's predicted optimum (see :func:`_one_by_one`).
     """
     began = time.perf_counter()
     count = thetas.shape[0]
@@ -1128,7 +1139,7 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None):
         first_began = time.perf_counter()
         first = np.asarray(program(arrays, y0[0], thetas[0]))
         if time.perf_counter() - first_began > DESIGN_POINT_SECONDS:
-            packed = _one_by_one(program, arrays, first, y0, thetas, bar)
+            packed = _one_by_one(_host(problem), program, arrays, first, y0, thetas, bar, continuation)
     if packed is None:
         packed = _in_chunks(key, arrays, y0, thetas, share, chunk, bar)
     if bar is not None:
@@ -1154,29 +1165,59 @@ def usable_cores():
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def _one_by_one(program, arrays, first, y0, thetas, bar):
+def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
     """The packed solutions (points, width) of the points (y0, thetas), ``first`` that of
     the first point, solved a point per call of ``program`` (:func:`solve`'s, compiled)
     on a thread per usable core, fewer where their working memory together would pass
-    DESIGN_BATCH_MEMORY.
+    DESIGN_BATCH_MEMORY; ``host`` the problem's :class:`_Host`.
 
     Vmapped lanes run in lock-step: every loop of a batched program turns until its
     slowest lane is done, at each level of the nested loops of a dome's path solve. A
     batch of 20 axisymmetric default designs took 27 s, twice the 13 s of its points
     solved one after another, and 2 threads solve them in 7.3 s (2-core development
     machine, 2026-11-28; scratch scripts timing the solver's parts). A call releases the
-    interpreter while it runs, so the threads run their points side by side."""
+    interpreter while it runs, so the threads run their points side by side.
+
+    The points go in runs of DESIGN_CHAIN, one run per thread at a time. With
+    ``continuation`` the first of a run starts from its y0, each next from the optimum
+    that the point before predicts to first order with its implicit derivatives (where
+    that point is successful and has them), and where a point so started is not
+    successful it is solved again from its y0; the runs depend on the points' order
+    only, not on the threads. Without, every point starts from its y0."""
     memory = program.memory_analysis()
     per_point = None if memory is None else memory.temp_size_in_bytes
     workers = usable_cores() if not per_point else min(usable_cores(), max(1, DESIGN_BATCH_MEMORY // per_point))
-    packed = [first]
-    if bar is not None:
-        bar.update(1)
-    with ThreadPoolExecutor(max(1, min(workers, len(y0) - 1))) as pool:
-        for result in pool.map(lambda i: np.asarray(program(arrays, y0[i], thetas[i])), range(1, len(y0))):
-            packed.append(result)
+    lower, upper, scale = host.arrays[:3]
+    n, p = y0.shape[1], thetas.shape[1]
+    x_at, derivatives_at, status_at = (slice(*host.layout[name]) for name in ("x", "derivatives", "status"))
+    successful = STATUS_NAMES.index("successful")
+
+    def solved(i, start):
+        return np.asarray(program(arrays, start, thetas[i]))
+
+    def predicted(before, i):
+        """Point i's start from the solution ``before`` of point i - 1, or None."""
+        derivatives = before[derivatives_at].reshape(n, p)
+        if before[status_at][0] != successful or not np.all(np.isfinite(derivatives)):
+            return None
+        x = before[x_at] + derivatives @ (thetas[i] - thetas[i - 1])
+        return np.clip((x - lower) / scale, 0.0, (upper - lower) / scale)
+
+    def run(head):
+        packed = [first if head == 0 else solved(head, y0[head])]
+        for i in range(head + 1, min(head + DESIGN_CHAIN, len(y0))):
+            start = predicted(packed[-1], i) if continuation else None
+            result = None if start is None else solved(i, start)
+            packed.append(result if result is not None and result[status_at][0] == successful else solved(i, y0[i]))
+        return packed
+
+    heads = range(0, len(y0), DESIGN_CHAIN)
+    packed = []
+    with ThreadPoolExecutor(max(1, min(workers, len(heads)))) as pool:
+        for results in pool.map(run, heads):
+            packed += results
             if bar is not None:
-                bar.update(1)
+                bar.update(len(results))
     return np.stack(packed)
 
 

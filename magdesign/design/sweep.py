@@ -78,6 +78,7 @@ def sweep(
     chunk: int | None = None,
     progress: bool | None = None,
     over_units: dict | None = None,
+    continuation: bool = True,
 ) -> DesignSweep:
     """Solve ``problem`` at every point of a grid (or list) of its inputs, in compiled,
     chunked batches split over the local devices, or, for a model with slow loops of its own
@@ -96,6 +97,11 @@ def sweep(
         progress: a progress bar: True, False, or None (when stderr is a terminal and the
             sweep takes more than a second).
         over_units: display units of the swept keys, for tables.
+        continuation: where the points go one at a time, start each (but the first of
+            every DESIGN_CHAIN) from the optimum that the point before predicts with its
+            implicit derivatives, and solve it again from ``start`` where that fails
+            (fewer steps a point; a problem with several optima may then find another);
+            False: every point from ``start``. Not used in batches.
 
     Returns:
         A :class:`DesignSweep` with arrays of the grid's shape; a point that fails has its
@@ -123,6 +129,7 @@ def sweep(
     units = {t.output: t.unit for t in problem.targets}
     units.update({f"{lim.output}.{side}": lim.unit for lim in problem.limits for side in lim.sides})
     units.update(over_units or {})
-    solution, seconds = solve_batch(problem, y0, thetas, settings_of(rtol, atol, max_steps), chunk=chunk, progress=progress)
+    solution, seconds = solve_batch(problem, y0, thetas, settings_of(rtol, atol, max_steps), chunk=chunk, progress=progress,
+                                    continuation=continuation)
     return DesignSweep.from_core(problem, solution, thetas, seconds, over=points, shape=shape,
                                  over_units={key: units.get(key) for key in points})

@@ -1,6 +1,7 @@
 """Parts of the design solver checked on their own: the one-trip loop that runs work only
-where a vmapped lane needs it, the polish's custom derivative of its KKT residual (against
-plain forward-mode differentiation of the same residual), the QP's active-set rounds on
+where a vmapped lane needs it, the polish's custom derivatives of its KKT and feasibility
+residuals (against plain forward-mode differentiation of the same residuals), the jet it
+hands to the implicit derivatives and those derivatives against closed forms, the QP's active-set rounds on
 a subproblem that once sent a whole batch to the interior-point method, and the polish's
 linear solver (LU, else SVD) against numpy."""
 
@@ -36,7 +37,7 @@ def test_polish_residual_derivatives_match_plain_forward_mode(objective):
     """A model with curvature in both variables and a fixed input (theta) inside it, with
     one variable on a bound, one limit row held and one not: the KKT residual (with an
     objective) and the feasibility residual (without), whose derivatives in z come from
-    the model's jet and in theta from its first derivatives."""
+    the model's jet and in theta from the bounds and the model's values (and Jacobian)."""
 
     def model(v):
         a = v["a"]
@@ -57,8 +58,10 @@ def test_polish_residual_derivatives_match_plain_forward_mode(objective):
         equations = solver._Feasibility(problem, active, held, y_max)
         z = jnp.array([0.3, 0.6])
 
-    def plain(z, theta):
-        return equations.rows(z, solver._first_order_jet(problem, z, theta))
+    def plain(z, theta):  # the residual from the model's values and their Jacobian by plain forward mode
+        v, outputs = solver._values(problem, z[:2], theta)
+        J = jax.jacfwd(lambda y: solver._values(problem, y, theta)[0])(z[:2])
+        return equations.rows(z, solver.Jet(v, J, jnp.zeros((*J.shape, 2)), outputs))
 
     def custom(z, theta):
         return equations(z, theta)[0]
