@@ -113,6 +113,11 @@ DESIGN_ESCAPES = 4
 #   probed for a lower merit on both sides of that direction before it is accepted (a
 #   third- or fourth-order saddle such as x^3 at 0 has zero curvature);
 DESIGN_FLAT_CURVATURE = 1e-6
+# - the objective's scale (1 / its gradient's norm at the start) counts a gradient no
+#   smaller than this times its Hessian's norm there (scaled variables): a start next to
+#   a minimum, such as a sweep's prediction of its next optimum, has a gradient of
+#   rounding size, and 1 / |gradient| blew the polish's residual up to O(1) there;
+DESIGN_GRADIENT_FLOOR = 1e-6
 # - the active constraints' null space: directions whose singular value is below this,
 #   relative to the largest, are free (the rows are O(1) gradients, so 1e-9 separates a
 #   dependent row from rounding by several decades either way);

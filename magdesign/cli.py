@@ -126,7 +126,8 @@ def build_parser():
     sweep_cmd.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep_cmd.add_argument("--devices", type=int, metavar="N",
                            help="split this machine's CPU into N XLA devices and the points over them (a model "
-                                "with slow loops of its own goes a point at a time on a thread per core instead)")
+                                "with slow loops of its own goes a point at a time on a thread per core instead, each "
+                                "started from the one before's predicted optimum)")
     sweep_cmd.add_argument("--coordinator", metavar="HOST:PORT", help="jax.distributed: process 0's address")
     sweep_cmd.add_argument("--num-processes", type=int, metavar="N", help="jax.distributed: how many processes")
     sweep_cmd.add_argument("--process-id", type=int, metavar="I", help="jax.distributed: this process's index")

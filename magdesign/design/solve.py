@@ -1,7 +1,8 @@
 """The design solver: bounded, constrained, exact, with implicit derivatives.
 
 The search works on variables scaled to their bound width, y = (x - lower) / scale in
-[0, y_max], the objective scaled to a unit gradient at the start and each constraint row
+[0, y_max], the objective scaled to a unit gradient at the start (or, next to a
+stationary point, to a gradient of DESIGN_GRADIENT_FLOOR times its Hessian) and each constraint row
 to its target or limit. It has two stages:
 
 1. sequential quadratic programming (ours): at each accepted point the quadratic model
@@ -81,6 +82,7 @@ from magdesign._numerics import (
     DESIGN_ELASTIC,
     DESIGN_ESCAPES,
     DESIGN_FLAT_CURVATURE,
+    DESIGN_GRADIENT_FLOOR,
     DESIGN_HESSIAN_FLOOR,
     DESIGN_NULL_SPACE_RTOL,
     DESIGN_ON_CONSTRAINT,
@@ -495,10 +497,10 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         # A stationary point whose curvature is too small to tell a minimum (x^3 at 0, a
         # ridge of -x^4), or which the steps approached only linearly (as they approach a
         # degenerate point, where at a minimum with curvature Newton's steps shrink
-        # quadratically), is probed on both sides before it is accepted; a start that is
-        # stationary was approached by no steps. Without an objective there is no minimum
-        # to confirm, nor a direction to probe (every probe tried the point itself).
-        linear = (state.phase != START) & (jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d)))
+        # quadratically), is probed on both sides before it is accepted (a stationary start
+        # too: no steps tell how it was approached). Without an objective there is no
+        # minimum to confirm, nor a direction to probe (every probe tried the point itself).
+        linear = jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d))
         flat = (curvature <= DESIGN_FLAT_CURVATURE) | linear
         probe = stationary & ~saddle & flat & (state.escapes < DESIGN_ESCAPES) & (problem.objective is not None)
         phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)
@@ -550,12 +552,15 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
 
         # START: a start where the model is flat in every direction (the centre of a
         # symmetric design) offers no step at all: move it once a little into the box, by
-        # a different amount per variable; otherwise scale the objective and accept it.
+        # a different amount per variable; otherwise scale the objective and accept it
+        # (to a unit gradient, counted no smaller than DESIGN_GRADIENT_FLOOR times the
+        # Hessian: next to a stationary point 1 / |gradient| left the polish only rounding).
         flat = start & ~state.nudged & jnp.all(jet.J == 0.0)
         inward = jnp.where(trial > 0.5 * y_max, -1.0, 1.0)
         nudge = inward * DESIGN_START_NUDGE * y_max * (1.0 + jnp.arange(n)) / n
         nudged = eqx.tree_at(lambda s: (s.y, s.nudged), state, (trial + nudge, jnp.asarray(True)))
-        scaled = eqx.tree_at(lambda s: s.weight, state, safe_div(1.0, jnp.linalg.norm(jet.J[0]), at_zero=1.0))
+        size = jnp.maximum(jnp.linalg.norm(jet.J[0]), DESIGN_GRADIENT_FLOOR * jnp.linalg.norm(jet.H[0]))
+        scaled = eqx.tree_at(lambda s: s.weight, state, safe_div(1.0, size, at_zero=1.0))
         accepted = accept(_pick(start, scaled, state), trial, jet)
         not_started = eqx.tree_at(lambda s: s.phase, state, jnp.asarray(NONFINITE_START))
 
@@ -1178,12 +1183,13 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
     machine, 2026-11-28; scratch scripts timing the solver's parts). A call releases the
     interpreter while it runs, so the threads run their points side by side.
 
-    The points go in runs of DESIGN_CHAIN, one run per thread at a time. With
-    ``continuation`` the first of a run starts from its y0, each next from the optimum
-    that the point before predicts to first order with its implicit derivatives (where
-    that point is successful and has them), and where a point so started is not
-    successful it is solved again from its y0; the runs depend on the points' order
-    only, not on the threads. Without, every point starts from its y0."""
+    With ``continuation`` the points go in runs of DESIGN_CHAIN, one run per thread at a
+    time (the progress bar moves a run at a time): the first of a run starts from its
+    y0, each next from the optimum that the point before predicts to first order with
+    its implicit derivatives (where that point is successful and has them), and where a
+    point so started is not successful it is solved again from its y0. The runs depend
+    on the points' order (and, under ``jax.distributed``, on each process's share), not
+    on the threads. Without, every point starts from its y0."""
     memory = program.memory_analysis()
     per_point = None if memory is None else memory.temp_size_in_bytes
     workers = usable_cores() if not per_point else min(usable_cores(), max(1, DESIGN_BATCH_MEMORY // per_point))
@@ -1197,21 +1203,23 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
 
     def predicted(before, i):
         """Point i's start from the solution ``before`` of point i - 1, or None."""
-        derivatives = before[derivatives_at].reshape(n, p)
+        change = thetas[i] - thetas[i - 1]
+        derivatives = before[derivatives_at].reshape(n, p)[:, change != 0.0]
         if before[status_at][0] != successful or not np.all(np.isfinite(derivatives)):
             return None
-        x = before[x_at] + derivatives @ (thetas[i] - thetas[i - 1])
+        x = before[x_at] + derivatives @ change[change != 0.0]
         return np.clip((x - lower) / scale, 0.0, (upper - lower) / scale)
 
     def run(head):
         packed = [first if head == 0 else solved(head, y0[head])]
-        for i in range(head + 1, min(head + DESIGN_CHAIN, len(y0))):
-            start = predicted(packed[-1], i) if continuation else None
+        for i in range(head + 1, min(head + length, len(y0))):
+            start = predicted(packed[-1], i)
             result = None if start is None else solved(i, start)
             packed.append(result if result is not None and result[status_at][0] == successful else solved(i, y0[i]))
         return packed
 
-    heads = range(0, len(y0), DESIGN_CHAIN)
+    length = DESIGN_CHAIN if continuation else 1
+    heads = range(0, len(y0), length)
     packed = []
     with ThreadPoolExecutor(max(1, min(workers, len(heads)))) as pool:
         for results in pool.map(run, heads):

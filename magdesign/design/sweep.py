@@ -82,7 +82,8 @@ def sweep(
 ) -> DesignSweep:
     """Solve ``problem`` at every point of a grid (or list) of its inputs, in compiled,
     chunked batches split over the local devices, or, for a model with slow loops of its own
-    on a CPU, a point per call on a thread per core (see :func:`~magdesign.design.solve.solve_batch`).
+    on a CPU, a point per call on a thread per core, as a continuation (see ``continuation``
+    and :func:`~magdesign.design.solve.solve_batch`).
 
     Args:
         problem: the design problem.
