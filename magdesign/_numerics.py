@@ -89,7 +89,9 @@ DESIGN_POINT_SECONDS = 0.02
 # 4.4 each from its own start, over 40 axisymmetric default designs (0.25-0.40 mm/N).
 DESIGN_CHAIN = 8
 # Sequential quadratic programming (design solver). The objective is scaled to a unit
-# gradient at the start and the constraints to their targets, so multipliers are O(1)-O(100):
+# gradient at the start and the constraints to their targets, so multipliers are O(1)-O(100)
+# (larger only from a start within DESIGN_GRADIENT_FLOOR of a stationary point, where the
+# objective's scale comes from its Hessian):
 # - the cost per unit of an elastic slack of the QP (a target or limit row relaxed where
 #   its linearisation cannot be met): far above any multiplier, so that a linearisation
 #   that can be met is met exactly;

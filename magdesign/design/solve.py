@@ -24,8 +24,10 @@ to its target or limit. It has two stages:
    constraints to be positive semi-definite, and a point that fails it is left along its
    direction of negative curvature, bent along the active constraints (at most
    DESIGN_ESCAPES times, then "not_a_minimum"). A stationary point whose least curvature
-   is too small to tell (x^3 at 0), or which the steps reached only linearly, is probed
-   on both sides of that direction at a few lengths before it is accepted.
+   is too small to tell (x^3 at 0), or which the steps reached only linearly (a
+   stationary start too, which no steps reached), is probed on both sides of that
+   direction at a few lengths before it is accepted; a problem without objective has
+   no minimum to confirm and is not probed.
    This stage is ours because it chooses the active set, which no JAX library does:
    optimistix's solvers take no constraints or bounds, and jaxopt's bounded QP (BoxOSQP)
    is too inexact for it (measured in benchmarks/design.py).
