@@ -1198,18 +1198,21 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
     lower, upper, scale = host.arrays[:3]
     n, p = y0.shape[1], thetas.shape[1]
     x_at, derivatives_at, status_at = (slice(*host.layout[name]) for name in ("x", "derivatives", "status"))
-    successful = STATUS_NAMES.index("successful")
 
     def solved(i, start):
         return np.asarray(program(arrays, start, thetas[i]))
 
+    def successful(packed):
+        return packed is not None and packed[status_at][0] == STATUS_NAMES.index("successful")
+
     def predicted(before, i):
         """Point i's start from the solution ``before`` of point i - 1, or None."""
         change = thetas[i] - thetas[i - 1]
-        derivatives = before[derivatives_at].reshape(n, p)[:, change != 0.0]
-        if before[status_at][0] != successful or not np.all(np.isfinite(derivatives)):
+        moved = change != 0.0
+        derivatives = before[derivatives_at].reshape(n, p)[:, moved]
+        if not successful(before) or not np.all(np.isfinite(derivatives)):
             return None
-        x = before[x_at] + derivatives @ change[change != 0.0]
+        x = before[x_at] + derivatives @ change[moved]
         return np.clip((x - lower) / scale, 0.0, (upper - lower) / scale)
 
     def run(head):
@@ -1217,7 +1220,7 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
         for i in range(head + 1, min(head + length, len(y0))):
             start = predicted(packed[-1], i)
             result = None if start is None else solved(i, start)
-            packed.append(result if result is not None and result[status_at][0] == successful else solved(i, y0[i]))
+            packed.append(result if successful(result) else solved(i, y0[i]))
         return packed
 
     length = DESIGN_CHAIN if continuation else 1
