@@ -33,25 +33,30 @@ to its target or limit. It has two stages:
    is too inexact for it (measured in benchmarks/design.py).
 2. polish (optimistix, to a tenth of the tolerance): with the active set of the last subproblem, the KKT system
    (stationarity on the free variables, targets and active limits as equations, active
-   bounds as fixed variables) is solved by ``optimistix.root_find`` (Newton, from the
-   point of Newton's first step, which is taken from the search's last jet, so that the
-   model is not evaluated again where the search has just evaluated it); a problem
-   without objective is a feasibility problem, whose equations (targets, active limits,
-   fixed variables; in general fewer than the unknowns) go to ``optimistix.root_find``
-   too, where Newton through an SVD is Gauss-Newton with minimum-norm steps (see
-   :func:`_polish` for why not ``optimistix.least_squares``). Their linear systems go
+   bounds as fixed variables) is solved by optimistix's Newton (``optimistix.Newton``),
+   stepped in the search's own loop once the search ends: optimistix's interactive use
+   of a solver (its ``init``, ``step`` and ``terminate``; the steps and stopping rule of
+   ``optimistix.root_find``), so that one place of the program evaluates the model and
+   XLA compiles it once, where a separate root find compiled it again. Newton's first step
+   is taken from the search's last jet, so the model is not evaluated again where the
+   search has just evaluated it. A problem without objective is a feasibility problem,
+   whose equations (targets, active limits, fixed variables; in general fewer than the
+   unknowns) Newton through an SVD solves as Gauss-Newton with minimum-norm steps (see
+   :func:`_newton`; ``optimistix.least_squares`` would differentiate grad |r|^2 / 2,
+   which traces second derivatives: on the spin-valve example that took the compile of a
+   batched solve from under 1 GB to over 11 GB). The linear systems go
    to :mod:`magdesign.design._linear`: LU where the Jacobian is square and well
    conditioned, else an SVD, whose minimum-norm step handles rank-deficient Jacobians
    (degenerate active sets, manifolds of solutions). The optimum's implicit derivatives
    (forward mode, with respect to the target values, limit bounds and fixed inputs) are
-   those of ``optimistix.ImplicitAdjoint``, the root find's own adjoint, asked at the
-   polished root with the model's jet from the polish's last evaluation there
-   (:func:`_implicit_derivatives`).
+   those of ``optimistix.ImplicitAdjoint``, asked at the polished root with the model's
+   jet from the polish's last evaluation there (:func:`_implicit_derivatives`).
 
 Everything after the Python-level unpacking is one jitted, vmappable function of a fixed
 problem structure; the outcome is a :class:`DesignStatus`, never an exception. The search
-is one loop whose body evaluates the model's jet (values, Jacobian, Hessians) once, at the
-point it tries, so XLA compiles one copy of the model for the search.
+and the polish are one loop whose body evaluates the model's jet (values, Jacobian,
+Hessians) once, at the point the search tries or at Newton's iterate, so XLA compiles one
+copy of the model for both.
 """
 
 import contextlib
@@ -66,7 +71,6 @@ import equinox as eqx
 import equinox._errors as _equinox_errors
 import jax
 import jax.numpy as jnp
-import lineax as lx
 import numpy as np
 import optimistix as optx
 from jax.experimental import multihost_utils
@@ -408,7 +412,8 @@ def _room(y, v, y_max):
 
 
 # Phases of the search. Each iteration tries one point and evaluates the model's jet there
-# once; the loop stops at the first phase from CONVERGED on, each an end of the search.
+# once; the search ends at the first phase from CONVERGED on (and the loop goes on with
+# the polish).
 START, SEARCH, ESCAPE, PROBE, CONVERGED, STALLED, NOT_MINIMUM, NONFINITE_START = range(8)
 
 # The probe of a flat stationary point tries the arc along its direction of least
@@ -456,8 +461,11 @@ class _State(eqx.Module):
     bend_first: Bool[Array, ""]
 
 
-def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
-    """Sequential quadratic programming from y0 (see the module docstring), as one loop."""
+def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -> "_Loop":
+    """Sequential quadratic programming from y0, then the polish from where it ends (see
+    the module docstring), as one loop whose trips each evaluate the model's jet once:
+    at the point the search tries, then at Newton's iterates. One place in the program
+    evaluates the model, so XLA compiles it once."""
     n, n_targets = y0.shape[0], len(problem.targets)
     m = max(n_targets + len(problem.limit_rows), 1)  # with _evaluate's row that never binds
     xtol = jnp.sqrt(settings.atol)
@@ -533,12 +541,12 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
             ),
         )
 
-    def body(state):
-        start = state.phase == START
+    def prepare(state, polishing):
+        """(state, trial): the point that the search tries next. After a step that needed
+        bending, the next is bent from its first try (curved constraints stay curved:
+        trying it straight first costs an evaluation a step)."""
         alpha = state.alpha
-        # After a step that needed bending, the next is bent from its first try (curved
-        # constraints stay curved: trying it straight first costs an evaluation a step).
-        bend_now = (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & state.bend_first
+        bend_now = ~polishing & (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & state.bend_first
         if problem.objective is not None:
             correction = where_needed(bend_now, lambda operands: _bend(*operands), bend_operands(state), state.correction)
             state = eqx.tree_at(
@@ -547,8 +555,12 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
                 (state.bent | (bend_now & jnp.any(correction != 0.0)), correction, jnp.where(bend_now, jnp.inf, state.straight)),
             )
         trial = state.y + alpha * state.direction + jnp.where(state.bent, alpha**2, 0.0) * state.correction
-        trial = jnp.where(start, state.y, jnp.clip(trial, 0.0, y_max))
-        jet = _jet(problem, trial, theta)
+        return state, jnp.where(state.phase == START, state.y, jnp.clip(trial, 0.0, y_max))
+
+    def update(state, trial, jet):
+        """The search's next state, where the model's jet at ``trial`` is ``jet``."""
+        start = state.phase == START
+        alpha = state.alpha
         finite = jnp.all(jnp.isfinite(jet.v)) & jnp.all(jnp.isfinite(jet.J)) & jnp.all(jnp.isfinite(jet.H))
         state = eqx.tree_at(lambda s: s.steps, state, state.steps + 1)
 
@@ -630,7 +642,36 @@ def _search(problem: Problem, y0, theta, settings: Settings, y_max) -> _State:
         history=jnp.full(_HISTORY, -jnp.inf),
         bend_first=jnp.asarray(False),
     )
-    return jax.lax.while_loop(lambda s: (s.phase < CONVERGED) & (s.steps < settings.max_steps), body, state)
+    newton = _newton(settings)
+
+    def body(loop):
+        polishing, stepping = loop.polishing, loop.polishing & ~loop.polish.done
+        prepared, trial = prepare(loop.search, polishing)
+        # Under vmap every lane runs each trip (a finished lane's state is kept), and a
+        # lane's model error (as NaN) reaches the whole batch: a finished lane evaluates
+        # the model where its search stopped, not at Newton's untried point, and the search's
+        # update, which runs if any lane searches, gets a polishing lane's own finite jet.
+        jet = _jet(problem, jnp.where(stepping, loop.polish.z[:n], trial), theta)
+        searched = where_needed(
+            ~polishing, lambda operands: update(*operands), (prepared, trial, _pick(polishing, loop.search.jet, jet)),
+            loop.search,
+        )
+        ended = ~polishing & ((searched.phase >= CONVERGED) | (searched.steps >= settings.max_steps))
+        polish = _pick(ended, _polish_start(problem, searched, y_max, newton), loop.polish)
+        # Newton's first step is from the search's last point, whose jet the search has
+        # (where it accepted a point; else the next trip evaluates the model there first).
+        accepted = (searched.phase != START) & (searched.phase != NONFINITE_START)
+        equations = _equations(problem, searched, y_max)
+        polish = where_needed(
+            stepping | (ended & accepted),
+            lambda operands: _newton_step(equations, newton, *operands, settings.max_steps),
+            (polish, _pick(polishing, jet, searched.jet)),
+            polish,
+        )
+        return _Loop(searched, polish, polishing | ended)
+
+    start = _Loop(state, _polish_start(problem, state, y_max, newton), jnp.asarray(False))
+    return jax.lax.while_loop(lambda loop: ~loop.polish.done, body, start)
 
 
 def _pick(condition, new, old):
@@ -659,9 +700,8 @@ class _KKT(eqx.Module):
     """The KKT residual of an active set (the polish's equations with an objective): at
     z = (y, multipliers), stationarity of the Lagrangian on the free variables, the
     fixed variables' distance to their bound, the targets and active limit rows, and the
-    inactive rows' multipliers. Called as ``kkt(z, theta)`` -> (residual, the model's
-    :class:`Jet` at y), with the residual's derivative in z from the model's Hessians
-    (:func:`_residual`)."""
+    inactive rows' multipliers, from the model's :class:`Jet` at y (its derivative in z
+    from the model's Hessians)."""
 
     problem: Problem
     weight: Float[Array, ""]
@@ -685,20 +725,15 @@ class _KKT(eqx.Module):
         d_stationarity = _lagrangian_hessian(jet, lam, self.weight) @ dy + jet.J[1:].T @ dlam
         return jnp.concatenate([jnp.where(self.active.fixed, dy, d_stationarity), jnp.where(self.equations, jet.J[1:] @ dy, dlam)])
 
-    def newton_step(self, z, jet, linear_solver):
-        """(n + m,) z (n + m,) less Newton's step from z, where the model's :class:`Jet`
-        is ``jet``: the step that optimistix's Newton takes from z with ``linear_solver``."""
-        jacobian = jax.vmap(lambda dz: self.tangent(jet, z, dz), out_axes=1)(jnp.eye(z.shape[0]))
-        return z - lx.linear_solve(lx.MatrixLinearOperator(jacobian), self.rows(z, jet), linear_solver, throw=False).value
-
-    def __call__(self, z, theta):
-        return _residual(z, theta, equations=self)
+    def unknowns(self, y, multipliers):
+        """(n + m,) z at y (n,) with the held rows' ``multipliers`` (m,)."""
+        return jnp.concatenate([y, jnp.where(self.equations, multipliers, 0.0)])
 
 
 class _Feasibility(eqx.Module):
     """The polish's equations without an objective: the targets and active limit rows,
-    and the fixed variables' distance to their bound. Called as ``equations(y, theta)``
-    -> (residual, the model's :class:`Jet` at y, without Hessians)."""
+    and the fixed variables' distance to their bound, from the model's :class:`Jet` at y
+    (its values and Jacobian)."""
 
     problem: Problem
     active: _Active
@@ -713,31 +748,9 @@ class _Feasibility(eqx.Module):
         """The residual's derivative along dy (n,) at y, where the model's :class:`Jet` is ``jet``."""
         return jnp.concatenate([jnp.where(self.equations, jet.J[1:] @ dy, 0.0), jnp.where(self.active.fixed, dy, 0.0)])
 
-    def __call__(self, y, theta):
-        return _residual(y, theta, equations=self)
-
-
-# The polish's residual, with its derivative in z from the model's jet (n tangents through
-# the model), where jax.jacfwd would push every direction of z through the model (for
-# the KKT residual, its second derivatives: n + m directions, 6 against 2 on the default
-# design). The jet rides along as the aux, so that the polish hands the model's values
-# and derivatives at its last point to the implicit derivatives (:func:`_linearised`);
-# it is never differentiated, and its tangent is zero. Tangents in theta (not taken by
-# the solver) go through :func:`_in_theta`.
-@eqx.filter_custom_jvp
-def _residual(z, theta, *, equations):
-    jet = _jet(equations.problem, z[: equations.y_max.shape[0]], theta)
-    return equations.rows(z, jet), jet
-
-
-@_residual.def_jvp
-def _residual_jvp(primals, tangents, *, equations):
-    (z, theta), (dz, dtheta) = primals, tangents
-    out = _residual(z, theta, equations=equations)
-    dr = jnp.zeros_like(out[0]) if dz is None else equations.tangent(out[1], z, dz)
-    if dtheta is not None:
-        dr = dr + jax.jvp(lambda theta: equations.rows(z, _in_theta(equations, z, out[1], theta)), (theta,), (dtheta,))[1]
-    return out, (dr, jax.tree.map(jnp.zeros_like, out[1]))
+    def unknowns(self, y, multipliers):
+        """(n,) the unknowns at y (n,): y itself (no multipliers)."""
+        return y
 
 
 def _in_theta(equations, z, jet, theta):
@@ -757,20 +770,18 @@ def _in_theta(equations, z, jet, theta):
     return eqx.tree_at(lambda j: (j.v, j.J, j.outputs), jet, (v, J, outputs))
 
 
-# optimistix's implicit adjoint, with the polish's linear solver: the root find's, and
-# that of the optimum's derivatives
+# optimistix's implicit adjoint, with the polish's linear solver
 _ADJOINT = optx.ImplicitAdjoint(linear_solver=LUOrSVD())
 
 
 def _implicit_derivatives(equations, z, jet, theta, usable):
-    """(len(z), p) d z / d theta at a root z of ``equations(z, theta)`` = (0, jet), where
-    the model's :class:`Jet` is ``jet`` (the polish's last): the tangents that
-    optimistix's implicit adjoint gives a root find's answer, asked of it at the root
-    apart from the root find, of the equations to first order about z
+    """(len(z), p) d z / d theta at a root z of the polish's ``equations``, where the
+    model's :class:`Jet` is ``jet`` (the polish's last): the tangents that optimistix's
+    implicit adjoint gives a root find's answer, asked of it at the root, of the
+    equations to first order about z
     (:func:`_linearised`), so that the model is not evaluated again, nor traced again,
-    unless it depends on theta (fixed inputs). Forward mode through the root find itself
-    (jacfwd of the polish) traced its whole loop under JAX's jvp and vmap, and with it
-    the model.
+    unless it depends on theta (fixed inputs). Forward mode through the polish's loop
+    itself would trace it whole under JAX's jvp and vmap, and with it the model.
 
     ``usable``: False where z or the equations there are not finite. The equations
     are then zero (so are the derivatives, which the caller masks): lineax checks the
@@ -796,61 +807,82 @@ def _linearised(root, _, inputs):
     return jnp.where(usable, equations.rows(z, _in_theta(equations, z, jet, theta)) + equations.tangent(jet, z, root - z), 0.0)
 
 
-def _last_evaluated(solution):
-    """(z, largest residual entry, the model's jet) at the last point where optimistix's
-    Newton evaluated the equations: its answer plus its last step (solution.state.diff,
-    taken from that point). Its residual and jet come with the solve, where evaluating
-    them at the answer would cost one more evaluation of the model; Newton stops when
-    that step is below its tolerances (a tenth of the design's)."""
-    z = solution.value + jax.lax.stop_gradient(solution.state.diff)
-    return z, jnp.max(jnp.abs(solution.state.f), initial=0.0), solution.aux
+def _about(equations, z, jet, root):
+    """The polish's ``equations`` to first order in ``root`` about z, where the model's
+    :class:`Jet` is ``jet``: what Newton's step from z solves."""
+    return equations.rows(z, jet) + equations.tangent(jet, z, root - z)
 
 
-def _polish(problem: Problem, y, multipliers, theta, active: _Active, weight, settings: Settings, y_max, jet=None):
-    """The exact solution of the active set's equations near (y, multipliers), by
-    optimistix (see the module docstring). Returns (y, multipliers, residual, polished,
-    (equations, z)) with ``residual`` the largest entry of the KKT (or feasibility)
-    residual, ``polished`` the model's :class:`Jet` at the polished point, and the equations
-    that optimistix solved with their unknowns z there, for :func:`_implicit_derivatives`. ``jet``:
-    None, or the model's :class:`Jet` at y, already evaluated (the search's; NaN where
-    the search accepted no point), from which a problem with an objective takes Newton's
-    first step before optimistix takes over, where optimistix would have evaluated the
-    model at y again."""
-    n, n_targets = y.shape[0], len(problem.targets)
-    equations = jnp.concatenate([jnp.ones(n_targets, bool), active.limits])
-    # Newton stops where its residual is below a tenth of the design's tolerance and its
-    # step below that relative to (1 + |z|): from the search's point typically one step
-    # and one evaluation of the model (at rtol * 1e-3, a second evaluation confirmed that
-    # the first had already met the design's tolerance, on the default design).
-    solver_options = dict(rtol=settings.rtol * 0.1, atol=settings.rtol * 0.1, linear_solver=LUOrSVD())
-
+def _equations(problem: Problem, search: _State, y_max):
+    """The polish's equations on the active set of the search's last subproblem: the KKT
+    system with an objective, else the feasibility equations."""
+    step = search.step
+    active = _Active(step.active_limits, step.at_lower, step.at_upper)
+    held = jnp.concatenate([jnp.ones(len(problem.targets), bool), active.limits])
     if problem.objective is None:
+        return _Feasibility(problem, active, held, y_max)
+    return _KKT(problem, search.weight, active, held, y_max)
 
-        equations_of = _Feasibility(problem, active, equations, y_max)
-        # A root find with Newton steps through an SVD (LUOrSVD: these equations are
-        # not square, in general): with more unknowns than equations that is
-        # Gauss-Newton with minimum-norm steps, and its implicit derivatives (-J^+ dr/dtheta) need first derivatives of
-        # the model only. optimistix.least_squares would differentiate grad |r|^2 / 2,
-        # which traces second derivatives: on the spin-valve example that took the
-        # compile of a batched solve from under 1 GB to over 11 GB.
-        solution = optx.root_find(
-            equations_of, optx.Newton(**solver_options), y, theta, has_aux=True,
-            max_steps=settings.max_steps, adjoint=_ADJOINT, throw=False,
-        )
-        y, residual, jet = _last_evaluated(solution)
-        return y, jnp.zeros_like(multipliers), residual, jet, (equations_of, y)
 
-    kkt = _KKT(problem, weight, active, equations, y_max)
-    z0 = jnp.concatenate([y, jnp.where(equations, multipliers, 0.0)])
-    if jet is not None:
-        z1 = kkt.newton_step(z0, jet, solver_options["linear_solver"])
-        z0 = jnp.where(jnp.all(jnp.isfinite(z1)), z1, z0)
-    solution = optx.root_find(
-        kkt, optx.Newton(**solver_options), z0, theta, has_aux=True,
-        max_steps=settings.max_steps, adjoint=_ADJOINT, throw=False,
-    )
-    z, residual, jet = _last_evaluated(solution)
-    return z[:n], z[n:], residual, jet, (kkt, z)
+def _newton(settings: Settings):
+    """The polish's root finder: optimistix's Newton, to a tenth of the design's tolerance
+    on its residual and on its step relative to (1 + |z|) (from the search's point
+    typically one or two steps), its linear systems through LU, else an SVD (LUOrSVD: the
+    feasibility equations are not square, in general; with more unknowns than equations
+    Newton through an SVD is Gauss-Newton with minimum-norm steps)."""
+    return optx.Newton(rtol=settings.rtol * 0.1, atol=settings.rtol * 0.1, linear_solver=LUOrSVD())
+
+
+class _Polish(eqx.Module):
+    """The polish's state: ``z`` the point where Newton evaluates the model next,
+    ``evaluated`` the last point where it did, ``jet`` the model's :class:`Jet` there,
+    ``newton`` optimistix's Newton state (its ``f`` the equations' residual at
+    ``evaluated``), ``done`` where Newton has stopped."""
+
+    z: Float[Array, " u"]
+    evaluated: Float[Array, " u"]
+    jet: Jet
+    newton: eqx.Module
+    done: Bool[Array, ""]
+
+
+def _polish_at(equations, z, jet, newton):
+    """The polish's state before its first step, at z, where the model's :class:`Jet` is
+    ``jet`` (or where it will be evaluated first)."""
+    fn = lambda root, _: (_about(equations, z, jet, root), None)  # noqa: E731
+    state = newton.init(fn, z, None, {}, jax.eval_shape(equations.rows, z, jet), None, frozenset())
+    return _Polish(z, z, jet, state, jnp.asarray(False))
+
+
+def _polish_start(problem: Problem, search: _State, y_max, newton):
+    """The polish's state before its first step: at the search's point and multipliers."""
+    equations = _equations(problem, search, y_max)
+    return _polish_at(equations, equations.unknowns(search.y, search.step.multipliers), search.jet, newton)
+
+
+def _newton_step(equations, newton, polish: _Polish, jet, max_steps):
+    """The polish after Newton's step from its point z, where the model's :class:`Jet` is
+    ``jet``. Stepped as optimistix's interactive use of a solver (its ``step`` and
+    ``terminate``) inside the solver's loop, so that the search and the polish evaluate the
+    model at one place of the program; the steps and stopping rule of
+    ``optimistix.root_find`` (which stops at a point that is not finite too), and a stop
+    at a residual that is not finite, where no step can lead."""
+    z = polish.z
+    fn = lambda root, _: (_about(equations, z, jet, root), None)  # noqa: E731
+    z_next, state, _ = newton.step(fn, z, None, {}, polish.newton, frozenset())
+    stop, _ = newton.terminate(fn, z, None, {}, state, frozenset())
+    finite = jnp.all(jnp.isfinite(z)) & jnp.all(jnp.isfinite(state.f))
+    done = stop | (state.step >= max_steps) | ~finite
+    return _Polish(z_next, z, jet, state, done)
+
+
+class _Loop(eqx.Module):
+    """The state of :func:`_search_and_polish`: the search's, the polish's, and whether
+    the search has ended and the polish runs."""
+
+    search: _State
+    polish: _Polish
+    polishing: Bool[Array, ""]
 
 
 def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
@@ -860,26 +892,25 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     y_max = (upper - lower) / scale
     tol = settings.rtol
 
-    search = _search(problem, jax.lax.stop_gradient(y0), theta, settings, y_max)
+    loop = _search_and_polish(problem, jax.lax.stop_gradient(y0), theta, settings, y_max)
+    search, polish = loop.search, loop.polish
     step = search.step
     active = _Active(step.active_limits, step.at_lower, step.at_upper)
-    y_start = jax.lax.stop_gradient(search.y)
-    multipliers_start = jax.lax.stop_gradient(step.multipliers)
-    # the search's last jet is the model's at y_start once it has accepted a point
-    accepted = (search.phase != START) & (search.phase != NONFINITE_START)
-    jet = jax.tree.map(lambda a: jnp.where(accepted, a, jnp.nan), jax.lax.stop_gradient(search.jet))
-
-    y, multipliers, residual, polished, (equations, z) = _polish(
-        problem, y_start, multipliers_start, theta, active, search.weight, settings, y_max, jet
-    )
+    y_start, multipliers_start = search.y, step.multipliers
+    # the polish's answer is the last point where it evaluated the model, with its jet
+    equations, z, polished = _equations(problem, search, y_max), polish.evaluated, polish.jet
+    residual = jnp.max(jnp.abs(polish.newton.f), initial=0.0)
+    y = z[:n]
+    multipliers = z[n:] if problem.objective is not None else jnp.zeros_like(multipliers_start)
     usable = jnp.isfinite(residual) & jnp.all(jnp.isfinite(z))
-    usable = usable & jnp.all(jnp.isfinite(polished.J)) & jnp.all(jnp.isfinite(polished.H))
+    usable = usable & jnp.all(jnp.stack([jnp.all(jnp.isfinite(leaf)) for leaf in jax.tree.leaves(polished)]))
     dy = _implicit_derivatives(equations, z, polished, theta, usable)[:n] if theta.shape[0] else jnp.zeros((n, 0))
     outputs, c = polished.outputs, polished.v[1:]
     # The polish refines the search's point; one that ends outside the box or far away
-    # found another solution of the equations, and the search's point stands.
+    # found another solution of the equations, and the search's point stands, as it does
+    # where the model is not finite at the polish's point.
     kept = (
-        jnp.all(jnp.isfinite(y))
+        usable
         & jnp.all((y >= -DESIGN_ON_CONSTRAINT) & (y <= y_max + DESIGN_ON_CONSTRAINT))
         & (jnp.max(jnp.abs(y - y_start)) <= DESIGN_POLISH_REACH)
     )
@@ -1094,8 +1125,7 @@ def solve(
             |achieved - value| <= rtol * scale (scale defaults to |value|); limits alike.
         atol: convergence tolerance on steps of the variables scaled to their bound width.
         max_steps: the most model evaluations of the search (line-search trials
-            included), and the most Newton steps of the polish (one more where it
-            starts from the search's jet).
+            included), and the most Newton steps of the polish.
 
     Returns:
         A :class:`DesignResult`: status (a :class:`DesignStatus` name: "successful",

@@ -1,9 +1,10 @@
 """Parts of the design solver checked on their own: the one-trip loop that runs work only
-where a vmapped lane needs it, the polish's custom derivatives of its KKT and feasibility
-residuals (against plain forward-mode differentiation of the same residuals), the jet it
-hands to the implicit derivatives and those derivatives against closed forms, the QP's active-set rounds on
-a subproblem that once sent a whole batch to the interior-point method, and the polish's
-linear solver (LU, else SVD) against numpy."""
+where a vmapped lane needs it, the polish's KKT and feasibility equations and their
+derivatives (against plain forward-mode differentiation of the same equations), its
+Newton step, the model's evaluations in the solver's loop, the jet the polish hands to the
+implicit derivatives and those derivatives against closed forms, the QP's active-set
+rounds on a subproblem that once sent a whole batch to the interior-point method, and the
+polish's linear solver (LU, else SVD) against numpy."""
 
 import importlib
 
@@ -33,11 +34,13 @@ def test_where_needed_under_vmap_computes_only_the_needed_lanes():
 
 
 @pytest.mark.parametrize("objective", [True, False])
-def test_polish_residual_derivatives_match_plain_forward_mode(objective):
+def test_polish_equations_and_their_derivatives_match_plain_forward_mode(objective):
     """A model with curvature in both variables and a fixed input (theta) inside it, with
-    one variable on a bound, one limit row held and one not: the KKT residual (with an
-    objective) and the feasibility residual (without), whose derivatives in z come from
-    the model's jet and in theta from the bounds and the model's values (and Jacobian)."""
+    one variable on a bound, one limit row held and one not: the KKT equations (with an
+    objective) and the feasibility equations (without), whose derivatives in z come from
+    the model's jet (Newton's steps) and in theta from the bounds and the model's values
+    (and Jacobian) (the implicit derivatives), against plain forward mode of the same
+    rows built from the model's values."""
 
     def model(v):
         a = v["a"]
@@ -58,120 +61,140 @@ def test_polish_residual_derivatives_match_plain_forward_mode(objective):
         equations = solver._Feasibility(problem, active, held, y_max)
         z = jnp.array([0.3, 0.6])
 
-    def plain(z, theta):  # the residual from the model's values and their Jacobian by plain forward mode
+    def plain(z, theta):  # the equations from the model's values and their Jacobian by plain forward mode
         v, outputs = solver._values(problem, z[:2], theta)
         J = jax.jacfwd(lambda y: solver._values(problem, y, theta)[0])(z[:2])
         return equations.rows(z, solver.Jet(v, J, jnp.zeros((*J.shape, 2)), outputs))
 
-    def custom(z, theta):
-        return equations(z, theta)[0]
-
-    # the model's jet rides along unchanged, with a zero tangent, whatever is differentiated
     jet = solver._jet(problem, z[:2], theta)
-    along_z = jax.jvp(lambda z: equations(z, theta), (z,), (jnp.ones_like(z),))
-    along_theta = jax.jvp(lambda theta: equations(z, theta), (theta,), (jnp.ones_like(theta),))
-    for (_, aux), (_, aux_dot) in (along_z, along_theta):
-        for got, expected in zip(jax.tree.leaves(aux), jax.tree.leaves(jet)):
-            np.testing.assert_allclose(got, expected, rtol=1e-15)
-        assert all(np.all(np.asarray(leaf) == 0.0) for leaf in jax.tree.leaves(aux_dot))
-
-    for argnum, point in ((0, z), (1, theta)):
+    np.testing.assert_allclose(equations.rows(z, jet), plain(z, theta), rtol=1e-15)
+    in_z = jax.vmap(lambda dz: equations.tangent(jet, z, dz), out_axes=1)(jnp.eye(z.size))
+    np.testing.assert_allclose(in_z, jax.jacfwd(plain)(z, theta), rtol=1e-13, atol=1e-13)
+    # The equations to first order about z, as the implicit derivatives see them: in the
+    # root from the jet, in theta through the model's values (and Jacobian) again.
+    linearised = lambda root, theta: solver._linearised(root, None, (equations, theta, z, jet, jnp.asarray(True)))  # noqa: E731
+    for argnum in (0, 1):
         expected = jax.jacfwd(plain, argnums=argnum)(z, theta)
-        got = jax.jacfwd(custom, argnums=argnum)(z, theta)
-        np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-13)
-        assert np.any(np.asarray(expected) != 0.0), point
-    # Both tangents at once (z and theta together), as a single directional derivative.
-    dz, dtheta = jnp.linspace(-1.0, 1.0, z.size), jnp.linspace(0.5, -0.5, theta.size)
-    np.testing.assert_allclose(jax.jvp(custom, (z, theta), (dz, dtheta))[1], jax.jvp(plain, (z, theta), (dz, dtheta))[1],
-                               rtol=1e-13, atol=1e-13)
-    if not objective:
-        return
-    # Newton's first step of the polish, from the model's jet, against numpy's minimum-norm
-    # solve with the plain residual's forward-mode Jacobian (singular at this point).
+        np.testing.assert_allclose(jax.jacfwd(linearised, argnums=argnum)(z, theta), expected, rtol=1e-13, atol=1e-13)
+        assert np.any(np.asarray(expected) != 0.0), argnum
+    # Newton's step from z (optimistix's, as the polish takes it) against numpy's
+    # minimum-norm solve with the plain equations' forward-mode Jacobian (singular at
+    # this point with an objective, not square without).
     expected = z - np.linalg.pinv(jax.jacfwd(plain)(z, theta), rcond=1e-12) @ plain(z, theta)
-    got = equations.newton_step(z, jet, LUOrSVD())
-    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
+    newton = solver._newton(solver.settings_of(1e-10, 1e-13, 10))
+    stepped = solver._newton_step(equations, newton, solver._polish_at(equations, z, jet, newton), jet, 10)
+    np.testing.assert_allclose(stepped.z, expected, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(stepped.evaluated, z)
+    np.testing.assert_allclose(stepped.newton.f, plain(z, theta), rtol=1e-15)
+    assert not bool(stepped.done)
 
 
-def test_polish_returns_the_residual_and_jet_of_the_point_it_returns():
-    """The polish reads its residual and the model's jet (which the implicit derivatives
-    use) from optimistix's last evaluation (Newton's state and aux) instead of evaluating
-    the model again; they must belong to the point it returns. Cut to two Newton steps
-    from a start off the root, so that the last step is large and a residual or jet from
-    another point would show."""
-    problem = Problem(
-        lambda v: {"f": v["x"] + 2.0 * v["y"], "r2": v["x"] ** 2 + v["y"] ** 2},
-        [Variable("x", -3.0, 3.0), Variable("y", -3.0, 3.0)], targets=[Target("r2", 2.0)], objective=Objective("f", "min"),
-    )
+def _r2_problem(model=None):
+    """minimise x + 2 y (+ a x^2 through ``model``) on the circle x^2 + y^2 = 2."""
+    model = model or (lambda v: {"f": v["x"] + 2.0 * v["y"], "r2": v["x"] ** 2 + v["y"] ** 2})
+    return Problem(model, [Variable("x", -3.0, 3.0, start=-0.9), Variable("y", -3.0, 3.0, start=-1.8)],
+                   targets=[Target("r2", 2.0)], objective=Objective("f", "min"))
+
+
+def test_polish_ends_with_the_residual_and_jet_of_the_point_it_returns():
+    """The solver's one loop evaluates the model at the point the search tries, then at
+    Newton's iterates, and the polish keeps the residual and the jet (which the implicit
+    derivatives use) of the last point it evaluated, which it returns: they must belong
+    to that point. Cut to two steps, so that the polish ends off the root and a residual or
+    jet from another point would show."""
+    problem = _r2_problem()
     feasibility = Problem(problem.model, problem.variables, targets=problem.targets)
     settings = solver.settings_of(1e-10, 1e-13, 2)
     y_max = jnp.array([1.0, 1.0])  # scaled variables: (x + 3) / 6
     y0, theta = jnp.array([0.35, 0.2]), jnp.asarray(solver.problem_arrays(problem, np)[4])
-    no_bounds = solver._Active(jnp.zeros(0, bool), jnp.zeros(2, bool), jnp.zeros(2, bool))
     for p in (problem, feasibility):
-        weight = jnp.asarray(1.0 if p.objective is not None else 0.0)
-        y, lam, residual, jet, _ = solver._polish(p, y0, jnp.array([0.5]), theta, no_bounds, weight, settings, y_max)
+        loop = jax.jit(lambda y0: solver._search_and_polish(p, y0, theta, settings, y_max))(y0)
+        polish, search = loop.polish, loop.search
+        assert int(search.steps) == 2 and int(polish.newton.step) == 2
+        z = polish.evaluated
+        y = z[:2]
         # the model at y, by plain forward mode
         v, outputs = solver._values(p, y, theta)
         J = jax.jacfwd(lambda y: solver._values(p, y, theta)[0])(y)
         x = -3.0 + 6.0 * y
         if p.objective is not None:
-            stationarity = weight * J[0] + J[1:].T @ lam
-            r = jnp.concatenate([stationarity, v[1:]])
+            r = jnp.concatenate([search.weight * J[0] + J[1:].T @ z[2:], v[1:]])
             # f = x + 2 y has no curvature; r2 = x^2 + y^2 in scaled variables: 72 I / 2 (target scale 2)
-            np.testing.assert_allclose(jet.H[0], 0.0, atol=1e-12)
-            np.testing.assert_allclose(jet.H[1], 36.0 * np.eye(2), rtol=1e-12)
+            np.testing.assert_allclose(polish.jet.H[0], 0.0, atol=1e-12)
+            np.testing.assert_allclose(polish.jet.H[1], 36.0 * np.eye(2), rtol=1e-12)
         else:
-            r = v[1:]
+            r = jnp.concatenate([v[1:], jnp.zeros(2)])
         assert float(jnp.max(jnp.abs(r))) > 1e-9  # two steps from this start: not yet converged
-        np.testing.assert_allclose(residual, jnp.max(jnp.abs(r)), rtol=1e-12)
-        np.testing.assert_allclose(jet.outputs, outputs, rtol=1e-14)
-        named = dict(zip(p.outputs, np.asarray(jet.outputs)))
+        np.testing.assert_allclose(polish.newton.f, r, rtol=1e-12, atol=1e-15)
+        named = dict(zip(p.outputs, np.asarray(polish.jet.outputs)))
         np.testing.assert_allclose(named["r2"], x[0] ** 2 + x[1] ** 2, rtol=1e-14)
         if p.objective is not None:
             np.testing.assert_allclose(named["f"], x[0] + 2.0 * x[1], rtol=1e-14)
-        np.testing.assert_allclose(jet.v, v, rtol=1e-12)
-        np.testing.assert_allclose(jet.J, J, rtol=1e-12)
+        np.testing.assert_allclose(polish.jet.v, v, rtol=1e-12)
+        np.testing.assert_allclose(polish.jet.J, J, rtol=1e-12)
 
 
-def test_polish_starts_from_the_search_jet_without_evaluating_the_model_again(monkeypatch):
-    """The polish starts at the search's last point, whose jet the search has, and takes
-    Newton's first step from it: the model is evaluated once less (counted by a callback
-    in the model) than where the polish is given no jet, and the answer, with its
-    derivatives, is the same."""
+@pytest.mark.parametrize("objective", [True, False])
+def test_the_model_is_evaluated_once_a_trip_and_the_polish_starts_from_the_search_jet(objective):
+    """Counted by a callback in the model: the search evaluates it once per step, and the
+    polish, whose first Newton step is taken from the search's last jet, once per further
+    Newton step (the model at the search's point is not evaluated again)."""
     calls = []
 
     def model(v):
         jax.debug.callback(lambda: calls.append(1))
         return {"f": v["x"] + 2.0 * v["y"] + v["a"] * v["x"] ** 2, "r2": v["x"] ** 2 + v["y"] ** 2}
 
-    problem = Problem(model, [Variable("x", -3.0, 3.0), Variable("y", -3.0, 3.0)], targets=[Target("r2", 2.0)],
-                      objective=Objective("f", "min"), fixed={"a": 0.1})
-    theta = jnp.asarray(solver.problem_arrays(problem, np)[4])
-    jax.jit(lambda y: solver._jet(problem, y, theta))(jnp.array([0.3, 0.4])).v.block_until_ready()
-    per_jet, _ = len(calls), calls.clear()
-    assert per_jet >= 1
+    problem = _r2_problem(model)
+    problem = Problem(model, problem.variables, targets=problem.targets, fixed={"a": 0.1},
+                      objective=problem.objective if objective else None)
+    lower, upper, scale, start, theta = (jnp.asarray(a) for a in solver.problem_arrays(problem, np))
+    run = jax.jit(lambda y0: solver._search_and_polish(problem, y0, theta, solver.settings_of(1e-10, 1e-13, 100),
+                                                       (upper - lower) / scale))
+    jax.block_until_ready(run((start - lower) / scale))
+    calls.clear()
+    loop = jax.block_until_ready(run((start - lower) / scale))
+    assert int(loop.search.phase) == solver.CONVERGED
+    # with an objective two Newton steps (one evaluation); without, the search's point
+    # already solves the feasibility equations, and Newton's first step confirms it
+    assert int(loop.polish.newton.step) == (2 if objective else 1)
+    assert len(calls) == int(loop.search.steps) + int(loop.polish.newton.step) - 1
+    assert solve(problem).status == "successful"
 
-    def solved():
-        calls.clear()
-        result = solve(problem)
-        assert result.status == "successful"
-        return len(calls), result
 
-    count, result = solved()
-    jax.clear_caches()
-    solver._compiled.cache_clear()
-    polish = solver._polish
-    monkeypatch.setattr(solver, "_polish", lambda *args: polish(*args[:8]))  # without the search's jet
-    count_without, result_without = solved()
-    solver._compiled.cache_clear()
-    assert count == count_without - per_jet
-    for name, value in result_without.parameters.items():
-        np.testing.assert_allclose(result.parameters[name], value, rtol=1e-13)
-    for key, row in result_without.derivatives.items():
-        for name, value in row.items():
-            assert np.isfinite(value)
-            np.testing.assert_allclose(result.derivatives[key][name], value, rtol=1e-12)
+def test_lanes_of_a_batch_that_end_on_different_trips_equal_their_own_solves():
+    """The solver's loop under vmap: lanes whose search and polish end on different trips
+    (different starts and targets), and one where the model is NaN from the start (its
+    search accepts no point, so its polish must not step from the search's blank jet: it
+    evaluates the model at the start, finds it NaN and stops after one step), each equal
+    to the same lane solved alone."""
+
+    def model(v):
+        return {"f": v["x"] + 2.0 * v["y"] + 0.1 * v["x"] ** 2, "r2": (v["x"] ** 2 + v["y"] ** 2) * jnp.sqrt(v["b"])}
+
+    problem = _r2_problem(model)
+    problem = Problem(model, problem.variables, targets=problem.targets, objective=problem.objective, fixed={"b": 1.0})
+    lower, upper, scale, _, theta = solver.problem_arrays(problem, np)
+    settings = solver.settings_of(1e-10, 1e-13, 100)
+    starts = (np.array([[-0.9, -1.8], [2.5, 2.5], [0.3, -0.2], [-0.9, -1.8]]) - lower) / scale
+    thetas = np.array([[2.0, 1.0], [3.0, 1.0], [1.0, 2.0], [2.0, -1.0]])  # (target r2, b); b < 0: NaN
+    core = lambda y0, theta: solver._core(problem, y0, theta, settings)  # noqa: E731
+    batched = jax.jit(jax.vmap(core))(jnp.asarray(starts), jnp.asarray(thetas))
+    statuses = [solver.STATUS_NAMES[int(k)] for k in batched.status]
+    assert statuses == ["successful"] * 3 + ["nonfinite"]
+    assert len(set(np.asarray(batched.steps[:3]).tolist())) > 1  # the lanes end on different trips
+    one = jax.jit(core)
+    for lane in range(4):
+        alone = one(jnp.asarray(starts[lane]), jnp.asarray(thetas[lane]))
+        for name, got, expected in zip(solver.CoreSolution._fields, batched, alone):
+            np.testing.assert_allclose(np.asarray(got[lane], float), np.asarray(expected, float), rtol=1e-12, atol=1e-15,
+                                       err_msg=f"lane {lane}: {name}")
+    y_max = jnp.asarray((upper - lower) / scale)
+    loop = jax.jit(lambda y0, theta: solver._search_and_polish(problem, y0, theta, settings, y_max))(
+        jnp.asarray(starts[3]), jnp.asarray(thetas[3]))
+    assert int(loop.search.phase) == solver.NONFINITE_START and int(loop.search.steps) == 1
+    assert int(loop.polish.newton.step) == 1 and not np.all(np.isfinite(loop.polish.newton.f))
+    np.testing.assert_array_equal(loop.polish.evaluated[:2], starts[3])
 
 
 def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
