@@ -657,11 +657,11 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             loop.search,
         )
         ended = ~polishing & ((searched.phase >= CONVERGED) | (searched.steps >= settings.max_steps))
-        polish = _pick(ended, _polish_start(problem, searched, y_max, newton), loop.polish)
+        equations = _equations(problem, searched, y_max)
+        polish = _pick(ended, _polish_start(equations, searched, newton), loop.polish)
         # Newton's first step is from the search's last point, whose jet the search has
         # (where it accepted a point; else the next trip evaluates the model there first).
         accepted = (searched.phase != START) & (searched.phase != NONFINITE_START)
-        equations = _equations(problem, searched, y_max)
         polish = where_needed(
             stepping | (ended & accepted),
             lambda operands: _newton_step(equations, newton, *operands, settings.max_steps),
@@ -670,7 +670,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         )
         return _Loop(searched, polish, polishing | ended)
 
-    start = _Loop(state, _polish_start(problem, state, y_max, newton), jnp.asarray(False))
+    start = _Loop(state, _polish_start(_equations(problem, state, y_max), state, newton), jnp.asarray(False))
     return jax.lax.while_loop(lambda loop: ~loop.polish.done, body, start)
 
 
@@ -807,10 +807,11 @@ def _linearised(root, _, inputs):
     return jnp.where(usable, equations.rows(z, _in_theta(equations, z, jet, theta)) + equations.tangent(jet, z, root - z), 0.0)
 
 
-def _about(equations, z, jet, root):
-    """The polish's ``equations`` to first order in ``root`` about z, where the model's
-    :class:`Jet` is ``jet``: what Newton's step from z solves."""
-    return equations.rows(z, jet) + equations.tangent(jet, z, root - z)
+def _about(equations, z, jet):
+    """fn(root, args) -> (the polish's ``equations`` to first order in the root about z,
+    where the model's :class:`Jet` is ``jet``; no aux): what Newton's step from z solves,
+    as optimistix's Newton takes it."""
+    return lambda root, _: (equations.rows(z, jet) + equations.tangent(jet, z, root - z), None)
 
 
 def _equations(problem: Problem, search: _State, y_max):
@@ -849,14 +850,13 @@ class _Polish(eqx.Module):
 def _polish_at(equations, z, jet, newton):
     """The polish's state before its first step, at z, where the model's :class:`Jet` is
     ``jet`` (or where it will be evaluated first)."""
-    fn = lambda root, _: (_about(equations, z, jet, root), None)  # noqa: E731
-    state = newton.init(fn, z, None, {}, jax.eval_shape(equations.rows, z, jet), None, frozenset())
+    state = newton.init(_about(equations, z, jet), z, None, {}, jax.eval_shape(equations.rows, z, jet), None, frozenset())
     return _Polish(z, z, jet, state, jnp.asarray(False))
 
 
-def _polish_start(problem: Problem, search: _State, y_max, newton):
-    """The polish's state before its first step: at the search's point and multipliers."""
-    equations = _equations(problem, search, y_max)
+def _polish_start(equations, search: _State, newton):
+    """The polish's state before its first step on ``equations`` (:func:`_equations` of
+    the search): at the search's point and multipliers."""
     return _polish_at(equations, equations.unknowns(search.y, search.step.multipliers), search.jet, newton)
 
 
@@ -867,8 +867,7 @@ def _newton_step(equations, newton, polish: _Polish, jet, max_steps):
     model at one place of the program; the steps and stopping rule of
     ``optimistix.root_find`` (which stops at a point that is not finite too), and a stop
     at a residual that is not finite, where no step can lead."""
-    z = polish.z
-    fn = lambda root, _: (_about(equations, z, jet, root), None)  # noqa: E731
+    z, fn = polish.z, _about(equations, polish.z, jet)
     z_next, state, _ = newton.step(fn, z, None, {}, polish.newton, frozenset())
     stop, _ = newton.terminate(fn, z, None, {}, state, frozenset())
     finite = jnp.all(jnp.isfinite(z)) & jnp.all(jnp.isfinite(state.f))
@@ -894,11 +893,10 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
 
     loop = _search_and_polish(problem, jax.lax.stop_gradient(y0), theta, settings, y_max)
     search, polish = loop.search, loop.polish
-    step = search.step
-    active = _Active(step.active_limits, step.at_lower, step.at_upper)
-    y_start, multipliers_start = search.y, step.multipliers
+    y_start, multipliers_start = search.y, search.step.multipliers
     # the polish's answer is the last point where it evaluated the model, with its jet
     equations, z, polished = _equations(problem, search, y_max), polish.evaluated, polish.jet
+    active = equations.active
     residual = jnp.max(jnp.abs(polish.newton.f), initial=0.0)
     y = z[:n]
     multipliers = z[n:] if problem.objective is not None else jnp.zeros_like(multipliers_start)
