@@ -11,7 +11,7 @@ small elements at the apex, where a light load bends the wall over a short lengt
 Kinematics. F = [[dr/dR, dr/dZ, 0], [dz/dR, dz/dZ, 0], [0, 0, (R + u_r) / R]] in
 (r, z, theta) order, evaluated at 3 x 3 Gauss points, which never lie on the axis. Its five
 non-zero entries are affine in the element's 18 nodal displacements: F5 = F_rest + H5,
-H5 = B u. The energy is formed from H5 without cancellation (materials.excess_invariants). The
+H5 = B u. The energy is formed from H5 without cancellation (as materials.excess_invariants: _excess). The
 nodes of the apex row lie on the axis: their u_r is held at 0 (symmetry).
 
 Volumetric locking. The energy is split as W(F) = W(J^(-1/3) F) + W(J^(1/3) I) (exact for
@@ -47,9 +47,10 @@ adaptively from the undeformed dome with a secant predictor; a force level that 
 carried is solved from the cubic Hermite interpolant from the step's start (or a lighter
 level already solved in that step) to the step's end, whose tangents come from Newton's
 last Hessian. Their equilibria are differentiated implicitly
-(:func:`implicit`: a custom JVP solving with the same tangent), so derivatives with
-respect to geometry, material, travel and force are exact whatever the iterations did, in
-forward and reverse mode and to any order.
+(:func:`implicit`: a custom JVP solving with the same tangent, whose own derivative,
+the second order that a design's Hessians take, is a rule of its own:
+:func:`state_tangent`), so derivatives with respect to geometry, material, travel and
+force are exact whatever the iterations did, in forward and reverse mode and to any order.
 """
 
 import functools
@@ -70,7 +71,6 @@ from magdesign._numerics import (
 )
 from magdesign._tracing import traced_once
 from magdesign.mechanics import _blocks
-from magdesign.mechanics.materials import excess_invariants
 
 # Penalty stiffness of the contact, kappa t / mu: the penetration it leaves is a 1/1000 of
 # the wall's own compression p t / E under the contact pressure p, a small part of the
@@ -208,9 +208,20 @@ def _assembly_tables(mesh):
 
 
 def _excess(H5):
-    """(Ibar1 - 3, Ibar2 - 3, J - 1) of the axisymmetric displacement gradient H5 = F5 - F_rest."""
+    """(Ibar1 - 3, Ibar2 - 3, J - 1) of the axisymmetric displacement gradient H5 = F5 - F_rest:
+    :func:`materials.excess_invariants` of H = [[a, b, 0], [c, e, 0], [0, 0, h]] with its
+    zero entries left out, a third of its traced operations (a product with a literal 0
+    is still an operation for JAX and XLA, and the element's derivatives multiply them)."""
     a, b, c, e, h = H5
-    return excess_invariants([[a, b, 0.0], [c, e, 0.0], [0.0, 0.0, h]])
+    # C - I = H + H^T + H^T H: its in-plane block and its hoop entry
+    d00, d11, d01, d22 = 2.0 * a + a * a + c * c, 2.0 * e + b * b + e * e, b + c + a * b + c * e, 2.0 * h + h * h
+    i1 = d00 + d11 + d22
+    i2 = 2.0 * i1 + d00 * d11 - d01 * d01 + (d00 + d11) * d22  # 2 tr D + the second invariant of D
+    in_plane = a + e + a * e - b * c  # det of the in-plane block of F, less 1
+    j = in_plane + h + h * in_plane
+    log_J = jnp.log1p(j)
+    s1, s2 = jnp.expm1(-2.0 / 3.0 * log_J), jnp.expm1(-4.0 / 3.0 * log_J)  # J^(-2/3) - 1, J^(-4/3) - 1
+    return (1.0 + s1) * i1 + 3.0 * s1, (1.0 + s2) * i2 + 3.0 * s2, j
 
 
 def _densities(material):
@@ -265,24 +276,26 @@ def _element_energy(X, u, material):
     return jnp.dot(volume, jax.vmap(isochoric)(H5) + jax.vmap(volumetric)(j_bar))
 
 
-def _element_derivatives(X, u, material):
-    """Gradient (18,) and Hessian (18, 18) of :func:`_element_energy` in u, assembled from
-    the derivatives of the densities in F5 (see the module docstring)."""
+def _element_derivatives(X, u, material, with_hessian=True):
+    """Gradient (18,) and Hessian (18, 18) (None unless ``with_hessian``) of
+    :func:`_element_energy` in u, assembled from the derivatives of the densities in F5
+    (see the module docstring)."""
     B, volume, A = _kinematics(X)
     H5 = B @ u
     isochoric, volumetric = _densities(material)
-    J, dJ, d2J = jax.vmap(lambda h: (_volume_change(h), jax.grad(_volume_change)(h), jax.hessian(_volume_change)(h)))(H5)
-    g_iso = jax.vmap(jax.grad(isochoric))(H5)
-    h_iso = jax.vmap(jax.jacfwd(jax.jacfwd(isochoric)))(H5)  # forward over forward: the quickest here
+    J, dJ = jax.vmap(lambda h: (_volume_change(h), jax.grad(_volume_change)(h)))(H5)
     J_bar = A @ J
-    U1 = jax.vmap(jax.grad(volumetric))(J_bar)
-    U2 = jax.vmap(jax.grad(jax.grad(volumetric)))(J_bar)
-    dE_dJ = A.T @ (volume * U1)
-    d2E_dJ2 = A.T @ ((volume * U2)[:, None] * A)
-    G = volume[:, None] * g_iso + dE_dJ[:, None] * dJ  # dE / dF5, (9, 5)
-    D = volume[:, None, None] * h_iso + dE_dJ[:, None, None] * d2J  # its point-wise blocks
-    L = jnp.einsum("gi,gij->gj", dJ, B)  # dJ / du, (9, 18)
+    dE_dJ = A.T @ (volume * jax.vmap(jax.grad(volumetric))(J_bar))
+    G = volume[:, None] * jax.vmap(jax.grad(isochoric))(H5) + dE_dJ[:, None] * dJ  # dE / dF5, (9, 5)
     gradient = jnp.einsum("gi,gij->j", G, B)
+    if not with_hessian:
+        return gradient, None
+    d2J = jax.vmap(jax.hessian(_volume_change))(H5)
+    h_iso = jax.vmap(jax.jacfwd(jax.jacfwd(isochoric)))(H5)  # forward over forward: the quickest here
+    U2 = jax.vmap(jax.grad(jax.grad(volumetric)))(J_bar)
+    d2E_dJ2 = A.T @ ((volume * U2)[:, None] * A)
+    D = volume[:, None, None] * h_iso + dE_dJ[:, None, None] * d2J  # dE / dF5's point-wise blocks
+    L = jnp.einsum("gi,gij->gj", dJ, B)  # dJ / du, (9, 18)
     hessian = jnp.einsum("gij,gik,gkl->jl", B, D, B) + L.T @ d2E_dJ2 @ L
     return gradient, hessian
 
@@ -329,19 +342,23 @@ def potential(mesh, y, params, force=0.0):
 
 
 @traced_once
-def derivatives(mesh, y, params):
-    """Gradient (size,) and Hessian (:class:`_blocks.Blocks`) of :func:`potential`
-    (force 0) in y, fixed displacements held out (their rows and columns 0).
+def derivatives(mesh, y, params, with_hessian=True):
+    """Gradient (size,) and Hessian (:class:`_blocks.Blocks`; None unless
+    ``with_hessian``) of :func:`potential` (force 0) in y, fixed displacements held out
+    (their rows and columns 0).
 
     The last gradient entry, dPi / dd, is the plate force (N)."""
     X_elem, u_elem, X_edge, z_edge = _parts(mesh, params, y)
-    g_elem, H_elem = jax.vmap(_element_derivatives, (0, 0, None))(X_elem, u_elem, params[2])
+    element = functools.partial(_element_derivatives, with_hessian=with_hessian)
+    g_elem, H_elem = jax.vmap(element, (0, 0, None))(X_elem, u_elem, params[2])
     contact = (X_edge, z_edge) + _contact_args(mesh, params)
     in_axes = (0, 0) + (None,) * 3
     g_edge = jax.vmap(jax.grad(_edge_energy, argnums=1), in_axes)(*contact)
-    H_edge = jax.vmap(jax.hessian(_edge_energy, argnums=1), in_axes)(*contact)
     g = _blocks.gather_sum(mesh.gradient_tables, jnp.concatenate([g_elem.ravel(), g_edge.ravel()]))
     g = g.at[-1].set(jnp.sum(g_edge[:, -1]))
+    if not with_hessian:
+        return g, None
+    H_edge = jax.vmap(jax.hessian(_edge_energy, argnums=1), in_axes)(*contact)
     flat = _blocks.gather_sum(mesh.hessian_tables, jnp.concatenate([H_elem.ravel(), H_edge.ravel()]))
     return g, _blocks.Blocks.from_flat(mesh.layout, flat, jnp.sum(H_edge[:, -1, -1]))
 
@@ -505,38 +522,69 @@ def implicit(mesh, control, params, values, states):
 def _implicit_jvp(mesh, control, primals, tangents):
     params, values, states = primals
     params_dot, values_dot, _ = tangents
-    force_control = control == "force"
     # through the primal again, so that a derivative of this rule (second order) sees the
     # states move with params and values
     states = implicit(mesh, control, params, values, states)
+    tangent = functools.partial(state_tangent, mesh, control == "force")
+    return states, jax.vmap(tangent, (None, 0, None, 0))(params, states, params_dot, values_dot)
 
-    def state_tangent(y, value, value_dot):
-        # The residual, mask (dPi/dy - force e_d) + (1 - mask)(y - held), moves with params
-        # through the gradient and with the held travel or force along e_d (-value_dot,
-        # either way). The gradient's tangent from derivatives' own jvp: one traced function
-        # for it and H (grad(potential)'s took as long to trace as the rest of the rule).
-        (_, H), (g_dot, _) = jax.jvp(lambda p: derivatives(mesh, y, p), (params,), (params_dot,))
-        mask = _control(mesh, force_control, value)[0]
-        r_dot = mask * g_dot - value_dot * _unit_last(mesh)
-        # only the solve's matvec is differentiated (custom_linear_solve): a factor with
-        # tangents would cost second derivatives a Cholesky derivative per direction
-        F, _ = _factor(mesh, lax.stop_gradient(H.restricted(mesh.layout, mask)))
 
-        def hessian_times(v):
-            return H.matvec(mesh.layout, v)
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1))
+def state_tangent(mesh, force_control, params, y, params_dot, value_dot):
+    """dy (size,): the derivative of the equilibrium y, whose plate force (``force_control``)
+    or travel is held, along params_dot and the held value's value_dot (N or m). Its own
+    derivative (a second derivative of y) is a rule of its own (:func:`_state_tangent_jvp`)."""
+    return _first_order(mesh, force_control, params, y, params_dot, value_dot)[0]
 
-        # held values move with their hold (r = y - held there); the unknowns follow from
-        # the symmetric system of their own rows
+
+def _first_order(mesh, force_control, params, y, params_dot, value_dot):
+    """(dy, a solve of the tangent system for a residual's tangent (size,) -> dy, the
+    gradient as a function of (y, params)): see :func:`state_tangent`."""
+    mask = mesh.mask(force_control)
+    _, H = derivatives(mesh, y, params)
+    # only the solve's matvec is differentiated (custom_linear_solve): a factor with
+    # tangents would cost a Cholesky derivative per direction
+    F, _ = _factor(mesh, lax.stop_gradient(H.restricted(mesh.layout, mask)))
+
+    def solve(r_dot):
+        # The residual, mask (dPi/dy - force e_d) + (1 - mask)(y - held), has the tangent
+        # mask g_dot - value_dot e_d (the held travel or force moves along e_d, either way)
+        # plus its Jacobian times dy. Held values move with their hold (r = y - held
+        # there); the unknowns follow from the symmetric system of their own rows.
         held_dot = (1 - mask) * -r_dot
-        b = -mask * (r_dot + hessian_times(held_dot))
+        b = -mask * (r_dot + H.matvec(mesh.layout, held_dot))
 
         def matvec(v):
-            return mask * hessian_times(mask * v) + (1 - mask) * v
+            return mask * H.matvec(mesh.layout, mask * v) + (1 - mask) * v
 
         free_dot = lax.custom_linear_solve(matvec, b, lambda _, c: _blocks.solve(mesh.layout, F, c), symmetric=True)
         return free_dot + held_dot
 
-    return states, jax.vmap(state_tangent)(states, values, values_dot)
+    def gradient(y, params):
+        return derivatives(mesh, y, params, with_hessian=False)[0]
+
+    unit = _unit_last(mesh)
+    _, g_dot = jax.jvp(lambda p: gradient(y, p), (params,), (params_dot,))
+    return solve(mask * g_dot - value_dot * unit), solve, gradient
+
+
+@state_tangent.defjvp
+def _state_tangent_jvp(mesh, force_control, primals, tangents):
+    # dy solves J dy = -(mask g_p params_dot - value_dot e_d), J the residual's Jacobian.
+    # Differentiated along the tangents (of y, params, params_dot, value_dot) with dy
+    # held, that equation gives J d(dy) = -(mask D - value_dot' e_d), D the derivative of
+    # the gradient's directional derivative g_y dy + g_p params_dot along them: one second
+    # directional derivative of the gradient, where differentiating the first-order rule
+    # took the tangent of the whole Hessian (a third derivative per entry) as well.
+    params, y, params_dot, value_dot = primals
+    params_q, y_q, params_dot_q, value_dot_q = tangents
+    dy, solve, gradient = _first_order(mesh, force_control, params, y, params_dot, value_dot)
+
+    def directional(y, params, params_dot):
+        return jax.jvp(gradient, (y, params), (dy, params_dot))[1]
+
+    _, second = jax.jvp(directional, (y, params, params_dot), (y_q, params_q, params_dot_q))
+    return dy, solve(mesh.mask(force_control) * second - value_dot_q * _unit_last(mesh))
 
 
 class Path(eqx.Module):

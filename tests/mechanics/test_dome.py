@@ -207,6 +207,28 @@ def test_axisymmetric_second_derivatives_equal_differences_of_the_first():
             assert second[j, i] == pytest.approx(difference, rel=1e-5)
 
 
+@pytest.mark.parametrize("control", ["force", "travel"])
+def test_axisymmetric_second_derivatives_in_the_held_value_equal_differences_of_the_first(control):
+    # the held force (dome_compliance) or travel (dome_curve) and the thickness, mixed:
+    # the second-order rule's held-value terms and its travel-held rows
+    def output(thickness, value):
+        if control == "force":
+            return dome_compliance(outer_radius=8e-3, thickness=thickness, material=RESIN, max_force=value)
+        curve = dome_curve(outer_radius=8e-3, thickness=thickness, material=RESIN, travels=jnp.stack([value]))
+        return curve.force[0]
+
+    args = (2e-3, 3.0 if control == "force" else 1.2e-3)
+    first = jax.jit(jax.jacfwd(output, argnums=(0, 1)))
+    second = np.array(jax.jit(jax.jacfwd(jax.jacfwd(output, argnums=(0, 1)), argnums=(0, 1)))(*args))
+    assert np.all(np.isfinite(second))
+    for j in range(2):
+        for i in range(2):
+            # Richardson's extrapolation of two steps: the travel's differences curve fast
+            fine, coarse = (_central_difference(lambda *a: first(*a)[j], args, i, step) for step in (1e-4, 2e-4))
+            difference = (4 * fine - coarse) / 3
+            assert second[j, i] == pytest.approx(difference, rel=1e-5, abs=1e-9 * np.max(np.abs(second)))
+
+
 def test_axisymmetric_is_finite_for_thick_walls_and_at_zero_force():
     compliance, grad = _axisymmetric_fns()
     args = (SEED[0], 0.5 * SEED[0], SEED[2], SEED[3], 5.0)
@@ -390,14 +412,15 @@ def test_a_second_plain_call_reuses_the_compiled_program(caplog):
 def test_the_tangent_is_traced_once_for_a_compliance_and_its_second_derivatives(monkeypatch):
     """The path's Newton steps, its tangents and the implicit derivatives (to second
     order, as a design's search takes them) all use the dome's tangent: JAX transforms one
-    trace of it (five traces before). A mesh no other test uses, so that no earlier trace
-    is reused: run once per process."""
+    trace of it (five traces before), and one trace of the gradient alone (whose
+    derivatives in params and second directional derivatives the implicit rules take). A
+    mesh no other test uses, so that no earlier trace is reused: run once per process."""
     traced = []
     element_derivatives = _axisymmetric._element_derivatives
 
-    def counted(*args):
-        traced.append(1)
-        return element_derivatives(*args)
+    def counted(*args, with_hessian=True):
+        traced.append(with_hessian)
+        return element_derivatives(*args, with_hessian=with_hessian)
 
     monkeypatch.setattr(_axisymmetric, "_element_derivatives", counted)
 
@@ -406,4 +429,4 @@ def test_the_tangent_is_traced_once_for_a_compliance_and_its_second_derivatives(
                                mesh=(1, 7))
 
     jax.make_jaxpr(jax.jacfwd(jax.jacfwd(compliance)))(2e-3)
-    assert len(traced) == 1
+    assert sorted(traced) == [False, True]

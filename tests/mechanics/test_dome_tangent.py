@@ -6,6 +6,8 @@ of the total potential, and the block tridiagonal factor with its border (the pl
 travel) against numpy's dense solve of the same matrix.
 """
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -13,11 +15,13 @@ import pytest
 
 from magdesign._numerics import DOME_LEVENBERG_START
 from magdesign.mechanics import MooneyRivlin, _axisymmetric, _blocks
+from magdesign.mechanics.materials import excess_invariants
 
 RESIN = MooneyRivlin(c10=0.1182e6, c01=0.1769e6)
 PARAMS = (jnp.asarray(8e-3), jnp.asarray(2e-3), RESIN)
 # jitted: the mesh and the layout are static index tables
 derivatives = jax.jit(_axisymmetric.derivatives, static_argnums=0)
+gradient_alone = jax.jit(functools.partial(_axisymmetric.derivatives, with_hessian=False), static_argnums=0)
 hessian = jax.jit(jax.hessian(_axisymmetric.potential, argnums=1), static_argnums=0)
 gradient = jax.jit(jax.grad(_axisymmetric.potential, argnums=1), static_argnums=0)
 factor = jax.jit(_blocks.factor, static_argnums=0)
@@ -34,6 +38,30 @@ def pressed_state(mesh, amplitude=1e-9):
     return jnp.asarray(np.append(amplitude * rng.standard_normal(mesh.n_dof) * mesh.free_u, 0.2e-3))
 
 
+@pytest.mark.parametrize("scale", [1e-4, 1e-2, 0.2])
+def test_axisymmetric_invariants_equal_the_general_ones(scale):
+    # the axisymmetric kinematics' invariants (zero entries of H left out) against the
+    # general 3 x 3 ones and against their definitions through C = F^T F
+    H5 = np.random.default_rng(3).uniform(-scale, scale, size=(50, 5))
+    mine = np.array(jax.vmap(lambda h: jnp.stack(_axisymmetric._excess(h)))(H5))
+
+    def general(h):
+        a, b, c, e, hoop = h
+        return jnp.stack(excess_invariants([[a, b, 0.0], [c, e, 0.0], [0.0, 0.0, hoop]]))
+
+    np.testing.assert_allclose(mine, np.array(jax.vmap(general)(H5)), rtol=1e-9 / scale, atol=0)
+    if scale >= 1e-2:  # the definitions lose digits to cancellation at small strains
+        F = np.zeros((50, 3, 3))
+        F[:, :2, :2] = np.eye(2) + H5[:, :4].reshape(50, 2, 2)
+        F[:, 2, 2] = 1 + H5[:, 4]
+        C = np.einsum("nki,nkj->nij", F, F)
+        J = np.linalg.det(F)
+        I1 = np.trace(C, axis1=1, axis2=2)
+        I2 = 0.5 * (I1**2 - np.einsum("nij,nji->n", C, C))
+        reference = np.stack([J ** (-2 / 3) * I1 - 3, J ** (-4 / 3) * I2 - 3, J - 1], axis=-1)
+        np.testing.assert_allclose(mine, reference, rtol=1e-10 / scale**2, atol=0)
+
+
 @pytest.mark.parametrize("shape", [(1, 4), (2, 6)])
 def test_assembled_hessian_equals_jax_hessian_of_the_potential(shape):
     mesh = _axisymmetric.Mesh(*shape, "bonded")
@@ -43,6 +71,9 @@ def test_assembled_hessian_equals_jax_hessian_of_the_potential(shape):
     g_ref = free * gradient(mesh, y, PARAMS)
     H_ref = free[:, None] * np.asarray(hessian(mesh, y, PARAMS)) * free[None, :]
     np.testing.assert_allclose(g, g_ref, rtol=0, atol=1e-12 * np.max(np.abs(g_ref)))
+    g_alone, none = gradient_alone(mesh, y, PARAMS)
+    assert none is None
+    np.testing.assert_allclose(g_alone, g_ref, rtol=0, atol=1e-12 * np.max(np.abs(g_ref)))
     np.testing.assert_allclose(H.dense(mesh.layout), H_ref, rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
     # what the solver reads of the blocks, against the same matrix
     np.testing.assert_allclose(H.diagonal_entries(mesh.layout), np.diag(H_ref), rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
