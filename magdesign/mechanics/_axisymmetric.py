@@ -48,7 +48,7 @@ carried is solved from the cubic Hermite interpolant from the step's start (or a
 level already solved in that step) to the step's end, whose tangents come from Newton's
 last Hessian. Their equilibria are differentiated implicitly
 (:func:`implicit`: a custom JVP solving with the same tangent, whose own derivative,
-the second order that a design's Hessians take, is a rule of its own:
+the second order that a design's Hessians take, is a rule of its own: the JVP of
 :func:`state_tangent`), so derivatives with respect to geometry, material, travel and
 force are exact whatever the iterations did, in forward and reverse mode and to any order.
 """
@@ -210,7 +210,7 @@ def _assembly_tables(mesh):
 def _excess(H5):
     """(Ibar1 - 3, Ibar2 - 3, J - 1) of the axisymmetric displacement gradient H5 = F5 - F_rest:
     :func:`materials.excess_invariants` of H = [[a, b, 0], [c, e, 0], [0, 0, h]] with its
-    zero entries left out, a third of its traced operations (a product with a literal 0
+    zero entries left out, under half of its traced operations (a product with a literal 0
     is still an operation for JAX and XLA, and the element's derivatives multiply them)."""
     a, b, c, e, h = H5
     # C - I = H + H^T + H^T H: its in-plane block and its hoop entry

@@ -145,3 +145,31 @@ def test_levenberg_shift_is_the_smallest_tried_that_makes_the_tangent_definite(r
         np.testing.assert_allclose(x, x_ref, rtol=0, atol=1e-9 * np.max(np.abs(x_ref)))
         np.testing.assert_allclose(x_batched, x_ref, rtol=0, atol=1e-9 * np.max(np.abs(x_ref)))
     assert chosen[0] == 0 and chosen[1] >= resume
+
+
+@pytest.mark.parametrize("force_control", [False, True])
+def test_second_order_rule_equals_jax_differentiating_the_first_order_formula(force_control):
+    # state_tangent's own JVP rule against JAX's plain forward mode through the
+    # first-order formula (its solve differentiated through the matvec), with every
+    # tangent non-zero: the state's, the parameters', and those of params_dot and value_dot
+    mesh = _axisymmetric.Mesh(1, 4, "bonded")
+    y = pressed_state(mesh, amplitude=1e-5)
+    rng = np.random.default_rng(4)
+    y_q = jnp.asarray(rng.standard_normal(mesh.size) * 1e-6 * np.append(mesh.free_u, 1.0))
+    params_dot = (jnp.asarray(1.0), jnp.asarray(0.5), MooneyRivlin(c10=0.3, c01=0.2))
+    params_q = (jnp.asarray(-0.4), jnp.asarray(1.0), MooneyRivlin(c10=0.1, c01=0.25))
+    params_dot_q = (jnp.asarray(0.2), jnp.asarray(-0.7), MooneyRivlin(c10=0.05, c01=0.1))
+    primals = (PARAMS, y, params_dot, jnp.asarray(0.3))
+    tangents = (params_q, y_q, params_dot_q, jnp.asarray(-1.7))
+
+    def rule(*a):
+        return _axisymmetric.state_tangent(mesh, force_control, *a)
+
+    def plain(*a):
+        return _axisymmetric._first_order(mesh, force_control, *a)[0]
+
+    dy, d_dy = jax.jit(lambda p, t: jax.jvp(rule, p, t))(primals, tangents)
+    dy_ref, d_dy_ref = jax.jit(lambda p, t: jax.jvp(plain, p, t))(primals, tangents)
+    np.testing.assert_allclose(dy, dy_ref, rtol=0, atol=1e-12 * np.max(np.abs(dy_ref)))
+    np.testing.assert_allclose(d_dy, d_dy_ref, rtol=0, atol=1e-10 * np.max(np.abs(d_dy_ref)))
+    assert np.max(np.abs(d_dy_ref)) > 0
