@@ -11,8 +11,9 @@ small elements at the apex, where a light load bends the wall over a short lengt
 Kinematics. F = [[dr/dR, dr/dZ, 0], [dz/dR, dz/dZ, 0], [0, 0, (R + u_r) / R]] in
 (r, z, theta) order, evaluated at 3 x 3 Gauss points, which never lie on the axis. Its five
 non-zero entries are affine in the element's 18 nodal displacements: F5 = F_rest + H5,
-H5 = B u. The energy is formed from H5 without cancellation (as materials.excess_invariants: _excess). The
-nodes of the apex row lie on the axis: their u_r is held at 0 (symmetry).
+H5 = B u. The energy is formed from H5 without cancellation (as in
+materials.excess_invariants). The nodes of the apex row lie on the axis: their u_r is held
+at 0 (symmetry).
 
 Volumetric locking. The energy is split as W(F) = W(J^(-1/3) F) + W(J^(1/3) I) (exact for
 the decoupled laws of :mod:`materials`: isochoric part plus U(J)). The isochoric part is
@@ -71,6 +72,7 @@ from magdesign._numerics import (
 )
 from magdesign._tracing import traced_once
 from magdesign.mechanics import _blocks
+from magdesign.mechanics.materials import isochoric_excess
 
 # Penalty stiffness of the contact, kappa t / mu: the penetration it leaves is a 1/1000 of
 # the wall's own compression p t / E under the contact pressure p, a small part of the
@@ -218,10 +220,7 @@ def _excess(H5):
     i1 = d00 + d11 + d22
     i2 = 2.0 * i1 + d00 * d11 - d01 * d01 + (d00 + d11) * d22  # 2 tr D + the second invariant of D
     in_plane = a + e + a * e - b * c  # det of the in-plane block of F, less 1
-    j = in_plane + h + h * in_plane
-    log_J = jnp.log1p(j)
-    s1, s2 = jnp.expm1(-2.0 / 3.0 * log_J), jnp.expm1(-4.0 / 3.0 * log_J)  # J^(-2/3) - 1, J^(-4/3) - 1
-    return (1.0 + s1) * i1 + 3.0 * s1, (1.0 + s2) * i2 + 3.0 * s2, j
+    return isochoric_excess(i1, i2, in_plane + h + h * in_plane)
 
 
 def _densities(material):
@@ -537,20 +536,26 @@ def state_tangent(mesh, force_control, params, y, params_dot, value_dot):
     return _first_order(mesh, force_control, params, y, params_dot, value_dot)[0]
 
 
+def _gradient(mesh, y, params):
+    """The gradient (size,) of :func:`potential` (force 0) in y: :func:`derivatives` without the Hessian."""
+    return derivatives(mesh, y, params, with_hessian=False)[0]
+
+
 def _first_order(mesh, force_control, params, y, params_dot, value_dot):
-    """(dy, a solve of the tangent system for a residual's tangent (size,) -> dy, the
-    gradient as a function of (y, params)): see :func:`state_tangent`."""
+    """(dy, solve): see :func:`state_tangent`; solve(g_dot, value_dot) -> dy for a tangent
+    g_dot (size,) of the gradient and value_dot of the held value."""
     mask = mesh.mask(force_control)
     _, H = derivatives(mesh, y, params)
     # only the solve's matvec is differentiated (custom_linear_solve): a factor with
     # tangents would cost a Cholesky derivative per direction
     F, _ = _factor(mesh, lax.stop_gradient(H.restricted(mesh.layout, mask)))
 
-    def solve(r_dot):
+    def solve(g_dot, value_dot):
         # The residual, mask (dPi/dy - force e_d) + (1 - mask)(y - held), has the tangent
         # mask g_dot - value_dot e_d (the held travel or force moves along e_d, either way)
         # plus its Jacobian times dy. Held values move with their hold (r = y - held
         # there); the unknowns follow from the symmetric system of their own rows.
+        r_dot = mask * g_dot - value_dot * _unit_last(mesh)
         held_dot = (1 - mask) * -r_dot
         b = -mask * (r_dot + H.matvec(mesh.layout, held_dot))
 
@@ -560,12 +565,8 @@ def _first_order(mesh, force_control, params, y, params_dot, value_dot):
         free_dot = lax.custom_linear_solve(matvec, b, lambda _, c: _blocks.solve(mesh.layout, F, c), symmetric=True)
         return free_dot + held_dot
 
-    def gradient(y, params):
-        return derivatives(mesh, y, params, with_hessian=False)[0]
-
-    unit = _unit_last(mesh)
-    _, g_dot = jax.jvp(lambda p: gradient(y, p), (params,), (params_dot,))
-    return solve(mask * g_dot - value_dot * unit), solve, gradient
+    _, g_dot = jax.jvp(lambda p: _gradient(mesh, y, p), (params,), (params_dot,))
+    return solve(g_dot, value_dot), solve
 
 
 @state_tangent.defjvp
@@ -578,13 +579,13 @@ def _state_tangent_jvp(mesh, force_control, primals, tangents):
     # took the tangent of the whole Hessian (a third derivative per entry) as well.
     params, y, params_dot, value_dot = primals
     params_q, y_q, params_dot_q, value_dot_q = tangents
-    dy, solve, gradient = _first_order(mesh, force_control, params, y, params_dot, value_dot)
+    dy, solve = _first_order(mesh, force_control, params, y, params_dot, value_dot)
 
     def directional(y, params, params_dot):
-        return jax.jvp(gradient, (y, params), (dy, params_dot))[1]
+        return jax.jvp(lambda y, p: _gradient(mesh, y, p), (y, params), (dy, params_dot))[1]
 
     _, second = jax.jvp(directional, (y, params, params_dot), (y_q, params_q, params_dot_q))
-    return dy, solve(mesh.mask(force_control) * second - value_dot_q * _unit_last(mesh))
+    return dy, solve(second, value_dot_q)
 
 
 class Path(eqx.Module):

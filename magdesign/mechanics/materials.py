@@ -58,6 +58,12 @@ def excess_invariants(H) -> tuple[Float[Array, ""], Float[Array, ""], Float[Arra
         + H[0][2] * (H[1][0] * H[2][1] - H[1][1] * H[2][0])
     )
     j = tr_H + 0.5 * (tr_H * tr_H - sum(H[i][k] * H[k][i] for i in n for k in n)) + det_H
+    return isochoric_excess(i1, i2, j)
+
+
+def isochoric_excess(i1, i2, j):
+    """(Ibar1 - 3, Ibar2 - 3, J - 1) from (I1 - 3, I2 - 3, J - 1), without cancellation
+    (J^(-2/3) - 1 and J^(-4/3) - 1 by expm1 and log1p)."""
     log_J = jnp.log1p(j)
     s1, s2 = jnp.expm1(-2.0 / 3.0 * log_J), jnp.expm1(-4.0 / 3.0 * log_J)  # J^(-2/3) - 1, J^(-4/3) - 1
     return (1.0 + s1) * i1 + 3.0 * s1, (1.0 + s2) * i2 + 3.0 * s2, j
