@@ -14,7 +14,8 @@ to its target or limit. It has two stages:
    (:mod:`magdesign.design._qp`); a backtracking line search on the exact l1 merit
    function f + nu |violation|_1 accepts the step, along a descent direction against the
    largest merit of the last few points (nonmonotone, so that a curved constraint's
-   higher-order violation does not stop the steps where the objective is flat). A whole
+   higher-order violation does not stop the steps where the objective is flat; a search
+   without objective turns monotone where it stops making progress). A whole
    step that the merit rejects is tried once more along an arc bent by its second-order
    correction, which keeps the active constraints met to second order (from the
    Hessians the search has already; it overcomes the Maratos effect on curved
@@ -436,7 +437,8 @@ class _State(eqx.Module):
     _HISTORY accepted points of the search (the first this one's; along a direction
     that is no descent, ``merit`` alone). ``radius`` bounds the subproblem's step
     (:data:`_RADIUS_GROWTH`). ``nu`` is the merit's penalty, ``weight`` the objective's
-    scale."""
+    scale. ``monotone``: the line search compares with this point's merit alone (a
+    feasibility search that stopped making progress, see :func:`_search_and_polish`)."""
 
     phase: Int[Array, ""]
     y: Float[Array, " n"]
