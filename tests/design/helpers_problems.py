@@ -73,6 +73,11 @@ SQRT2, SQRT3, SQRT7 = math.sqrt(2.0), math.sqrt(3.0), math.sqrt(7.0)
 # gives 1.23467971, 1.52443370).
 HS011_X1 = math.cbrt(1.25 + math.sqrt(25.0 / 16.0 + 1.0 / 216.0)) + math.cbrt(1.25 - math.sqrt(25.0 / 16.0 + 1.0 / 216.0))
 
+# hs019's optimum is where its two circles meet: subtracting their equations gives
+# x1 = 14.095 (the book's value, exactly), and the lower root of the first then x2
+# (the book gives 0.84296079).
+HS019_X2 = 5.0 - math.sqrt(100.0 - 9.095**2)
+
 HOCK_SCHITTKOWSKI = [
     Published("hs001", rosenbrock, [(-BOX, BOX), (-1.5, BOX)], [-2.0, 1.0], [1.0, 1.0], 0.0),
     Published("hs003", lambda x: x[1] + 1e-5 * (x[1] - x[0]) ** 2, [(-BOX, BOX), (0.0, BOX)], [10.0, 1.0], [0.0, 0.0], 0.0),
@@ -290,5 +295,45 @@ HOCK_SCHITTKOWSKI = [
             lambda x: 4.0 - 3.0 * x[0] - x[1] - 2.0 * x[2] + x[3],
             lambda x: x[1] + 4.0 * x[2] - 1.5,
         ],
+    ),
+    Published(
+        "hs019", lambda x: (x[0] - 10.0) ** 3 + (x[1] - 20.0) ** 3, [(13.0, 100.0), (0.0, 100.0)], [20.1, 5.84],
+        [14.095, HS019_X2], (14.095 - 10.0) ** 3 + (HS019_X2 - 20.0) ** 3,
+        g=[lambda x: (x[0] - 5.0) ** 2 + (x[1] - 5.0) ** 2 - 100.0, lambda x: 82.81 - (x[1] - 5.0) ** 2 - (x[0] - 6.0) ** 2],
+    ),
+    Published(
+        "hs030", lambda x: x[0] ** 2 + x[1] ** 2 + x[2] ** 2, [(1.0, 10.0), (-10.0, 10.0), (-10.0, 10.0)], [1.0] * 3,
+        [1.0, 0.0, 0.0], 1.0, g=[lambda x: x[0] ** 2 + x[1] ** 2 - 1.0],
+    ),
+    Published(
+        "hs036", lambda x: -x[0] * x[1] * x[2], [(0.0, 20.0), (0.0, 11.0), (0.0, 42.0)], [10.0] * 3, [20.0, 11.0, 15.0],
+        -3300.0, g=[lambda x: 72.0 - x[0] - 2.0 * x[1] - 2.0 * x[2]],
+    ),
+    Published(
+        "hs037", lambda x: -x[0] * x[1] * x[2], [(0.0, 42.0)] * 3, [10.0] * 3, [24.0, 12.0, 12.0], -3456.0,
+        g=[lambda x: 72.0 - x[0] - 2.0 * x[1] - 2.0 * x[2], lambda x: x[0] + 2.0 * x[1] + 2.0 * x[2]],
+    ),
+    Published(
+        "hs041", lambda x: 2.0 - x[0] * x[1] * x[2], [(0.0, 1.0)] * 3 + [(0.0, 2.0)], [2.0] * 4,
+        [2.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 2.0], 52.0 / 27.0, h=[lambda x: x[0] + 2.0 * x[1] + 2.0 * x[2] - x[3]],
+    ),
+    Published(
+        "hs042", lambda x: (x[0] - 1.0) ** 2 + (x[1] - 2.0) ** 2 + (x[2] - 3.0) ** 2 + (x[3] - 4.0) ** 2,
+        [(-BOX, BOX)] * 4, [1.0] * 4, [2.0, 2.0, 0.6 * SQRT2, 0.8 * SQRT2], 28.0 - 10.0 * SQRT2,
+        h=[lambda x: x[0] - 2.0, lambda x: x[2] ** 2 + x[3] ** 2 - 2.0],
+    ),
+    Published(
+        "hs050", lambda x: (x[0] - x[1]) ** 2 + (x[1] - x[2]) ** 2 + (x[2] - x[3]) ** 4 + (x[3] - x[4]) ** 4,
+        [(-BOX, BOX)] * 5, [35.0, -31.0, 11.0, 5.0, -5.0], [1.0] * 5, 0.0,
+        h=[
+            lambda x: x[0] + 2.0 * x[1] + 3.0 * x[2] - 6.0,
+            lambda x: x[1] + 2.0 * x[2] + 3.0 * x[3] - 6.0,
+            lambda x: x[2] + 2.0 * x[3] + 3.0 * x[4] - 6.0,
+        ],
+    ),
+    Published(
+        "hs051", lambda x: (x[0] - x[1]) ** 2 + (x[1] + x[2] - 2.0) ** 2 + (x[3] - 1.0) ** 2 + (x[4] - 1.0) ** 2,
+        [(-BOX, BOX)] * 5, [2.5, 0.5, 2.0, -1.0, 0.5], [1.0] * 5, 0.0,
+        h=[lambda x: x[0] + 3.0 * x[1] - 4.0, lambda x: x[2] + x[3] - 2.0 * x[4], lambda x: x[1] - x[4]],
     ),
 ]
