@@ -14,8 +14,7 @@ to its target or limit. It has two stages:
    (:mod:`magdesign.design._qp`); a backtracking line search on the exact l1 merit
    function f + nu |violation|_1 accepts the step, along a descent direction against the
    largest merit of the last few points (nonmonotone, so that a curved constraint's
-   higher-order violation does not stop the steps where the objective is flat; a search
-   without objective turns monotone where it stops making progress). A whole
+   higher-order violation does not stop the steps where the objective is flat). A whole
    step that the merit rejects is tried once more along an arc bent by its second-order
    correction, which keeps the active constraints met to second order (from the
    Hessians the search has already; it overcomes the Maratos effect on curved
@@ -437,8 +436,7 @@ class _State(eqx.Module):
     _HISTORY accepted points of the search (the first this one's; along a direction
     that is no descent, ``merit`` alone). ``radius`` bounds the subproblem's step
     (:data:`_RADIUS_GROWTH`). ``nu`` is the merit's penalty, ``weight`` the objective's
-    scale. ``monotone``: the line search compares with this point's merit alone (a
-    feasibility search that stopped making progress, see :func:`_search_and_polish`)."""
+    scale."""
 
     phase: Int[Array, ""]
     y: Float[Array, " n"]
@@ -461,7 +459,6 @@ class _State(eqx.Module):
     radius: Float[Array, ""]
     history: Float[Array, " h"]
     bend_first: Bool[Array, ""]
-    monotone: Bool[Array, ""]
 
 
 def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -> "_Loop":
@@ -472,14 +469,6 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
     n, n_targets = y0.shape[0], len(problem.targets)
     m = max(n_targets + len(problem.limit_rows), 1)  # with _evaluate's row that never binds
     xtol = jnp.sqrt(settings.atol)
-    # A feasibility search (no objective) has no curvature in its model (no Hessians): at
-    # a least violation short of zero its whole steps overshoot, and nonmonotone it went
-    # back and forth across it for good (x^2 = -1 at x = 0). Its line search turns
-    # monotone once a point's merit is no lower than that of the point _HISTORY accepted
-    # points before it, and its radius may shrink below the step tolerance, so that there
-    # it ends stationary (and the status says that the target is out of reach).
-    feasibility = problem.objective is None
-    radius_floor = xtol / _RADIUS_FLOOR if feasibility else _RADIUS_FLOOR * xtol
 
     def bend_operands(state):
         """:func:`_bend`'s operands for the step at the accepted point: its active rows."""
@@ -492,7 +481,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         taken = jnp.max(jnp.abs(state.direction))
         radius = jnp.where(searched & (state.alpha < 1.0), state.alpha * taken, state.radius)
         reached = searched & (state.alpha == 1.0) & (taken >= 0.9 * state.radius)
-        radius = jnp.maximum(jnp.where(reached, _RADIUS_GROWTH * state.radius, radius), radius_floor)
+        radius = jnp.maximum(jnp.where(reached, _RADIUS_GROWTH * state.radius, radius), _RADIUS_FLOOR * xtol)
         step, bound_multipliers = _step(jet, y, y_max, state.step, state.weight, n_targets, problem.objective is not None, radius)
         nu = jnp.maximum(state.nu, 2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0))
         merit = _merit(jet, state.weight, nu, n_targets)
@@ -527,7 +516,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)
         return eqx.tree_at(
             lambda s: (s.phase, s.y, s.jet, s.step, s.bound_multipliers, s.direction, s.correction, s.alpha, s.merit,
-                       s.slope, s.curvature, s.nu, s.bent, s.escapes, s.radius, s.history, s.bend_first, s.monotone),
+                       s.slope, s.curvature, s.nu, s.bent, s.escapes, s.radius, s.history, s.bend_first),
             state,
             (
                 phase,
@@ -549,7 +538,6 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
                 # after an escape or a probe
                 jnp.where((nu > state.nu) | ~searched, -jnp.inf, jnp.roll(state.history, 1)).at[0].set(merit),
                 searched & state.bent,
-                state.monotone | (feasibility & searched & (nu == state.nu) & (merit >= state.history[-1]) & (state.history[-1] > -jnp.inf)),
             ),
         )
 
@@ -597,7 +585,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         merit = _merit(jet, state.weight, state.nu, n_targets)
         # nonmonotone only in the search and along a descent direction (the history's
         # first entry is this point's merit)
-        reference = jnp.where(~state.monotone & (state.phase == SEARCH) & (state.slope < 0.0), jnp.max(state.history), state.merit)
+        reference = jnp.where((state.phase == SEARCH) & (state.slope < 0.0), jnp.max(state.history), state.merit)
         wanted = reference + _ARMIJO * (alpha * state.slope + alpha**2 * state.curvature)
         wanted = jnp.where(probing, state.merit - _ROUNDING * (1.0 + jnp.abs(state.merit)), wanted)
         good = finite & (merit <= wanted)
@@ -653,7 +641,6 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         radius=jnp.asarray(jnp.inf),
         history=jnp.full(_HISTORY, -jnp.inf),
         bend_first=jnp.asarray(False),
-        monotone=jnp.asarray(False),
     )
     newton = _newton(settings)
 

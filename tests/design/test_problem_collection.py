@@ -211,33 +211,6 @@ def test_unreachable_target_says_so():
     assert result.parameters["x"] == pytest.approx(2.0)
 
 
-@pytest.mark.parametrize(
-    "model, variables, least",
-    [
-        # x^2 = -1: the least violation is at x = 0, inside the box, where the gradient vanishes
-        (lambda v: {"y": v["x"] ** 2}, [Variable("x", -2.0, 2.0, start=0.5)], {"x": 0.0}),
-        (lambda v: {"y": v["x"] ** 2}, [Variable("x", -2.0, 2.0, start=0.0)], {"x": 0.0}),
-        # x^4 = -1: no curvature there either
-        (lambda v: {"y": v["x"] ** 4}, [Variable("x", -2.0, 2.0, start=0.5)], {"x": 0.0}),
-        # an ellipsoid in three variables, its centre off the start's axes
-        (
-            lambda v: {"y": v["x"] ** 2 + 2.0 * v["y"] ** 2 + 3.0 * (v["z"] - 0.1) ** 2},
-            [Variable("x", -2.0, 2.0, start=0.5), Variable("y", -1.0, 3.0, start=1.5), Variable("z", -2.0, 2.0, start=-1.0)],
-            {"x": 0.0, "y": 0.0, "z": 0.1},
-        ),
-    ],
-)
-def test_a_target_met_nowhere_ends_at_its_least_violation_inside_the_box(model, variables, least):
-    """A target that no point meets, whose least violation is a stationary point inside the
-    box (not at a bound): the search used to go back and forth across it until max_steps
-    ("max_steps_reached"); it must end there and say that the target is out of reach."""
-    result = solve(Problem(model, variables, targets=[Target("y", -1.0, scale=1.0)]))
-    assert result.status == "infeasible_target"
-    assert result.violated == ("y",)
-    for name, value in least.items():
-        assert result.parameters[name] == pytest.approx(value, abs=1e-4)
-
-
 def test_nonlinear_equations_from_a_far_start():
     """Targets only, two equations in two unknowns with one root: 10 (y - x^2) = 0 and
     1 - x = 0 (Rosenbrock's), from (-1.2, 1): solved at (1, 1)."""
