@@ -19,15 +19,18 @@ to its target or limit. It has two stages:
    correction, which keeps the active constraints met to second order (from the
    Hessians the search has already; it overcomes the Maratos effect on curved
    constraints), and after a step that needed it the next is bent from its first try.
-   Where the step vanishes the point is stationary; "successful"
-   then also needs the reduced Hessian of the Lagrangian on the null space of the active
-   constraints to be positive semi-definite, and a point that fails it is left along its
-   direction of negative curvature, bent along the active constraints (at most
-   DESIGN_ESCAPES times, then "not_a_minimum"). A stationary point whose least curvature
-   is too small to tell (x^3 at 0), or which the steps reached only linearly (a
-   stationary start too, which no steps reached), is probed on both sides of that
-   direction at a few lengths before it is accepted; a problem without objective has
-   no minimum to confirm and is not probed.
+   Where the step vanishes (the subproblem solved once more with the Hessian at its own
+   multipliers: the last point's, after an infeasible subproblem priced at the elastic
+   cost, made steps vanish where the point was not stationary) the point is stationary;
+   "successful" then also needs the reduced Hessian of the Lagrangian on the null space
+   of the active constraints to be positive semi-definite, and a point that fails it is
+   left along its direction of negative curvature, bent along the active constraints (at
+   most DESIGN_ESCAPES times, then "not_a_minimum"). A stationary point whose least
+   curvature is too small to tell (x^3 at 0), or which the steps reached only linearly
+   (a stationary start too, which no steps reached), is probed on both sides of a
+   direction that combines all its flat ones (:func:`_least_curvature`) at a few lengths
+   before it is accepted; a problem without objective has no minimum to confirm and is
+   not probed.
    This stage is ours because it chooses the active set, which no JAX library does:
    optimistix's solvers take no constraints or bounds, and jaxopt's bounded QP (BoxOSQP)
    is too inexact for it (measured in benchmarks/design.py).
@@ -366,6 +369,28 @@ def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective, radius):
     ), jnp.concatenate([lower_multipliers, upper_multipliers])
 
 
+def _settled_step(jet, y, y_max, last: _Step, weight, n_targets, radius, xtol):
+    """:func:`_step` (with an objective), solved once more where its step is shorter than
+    ``xtol``, now with the Hessian of the Lagrangian at its own multipliers. The first
+    solve's Hessian takes the ``last`` point's multipliers, which after an infeasible
+    (elastic) subproblem are priced at DESIGN_ELASTIC and then fall by orders of magnitude
+    a step; a Hessian that large makes a step short at a point that is not stationary
+    (hs063 stopped after 6 steps, "infeasible_target", with the objective's gradient 0.3
+    off the constraints' span). One QP in a loop of at most two trips, not two QPs: the
+    program stays the size it was."""
+
+    def solve(carry):
+        last, _, trips = carry
+        return (*_step(jet, y, y_max, last, weight, n_targets, True, radius), trips + 1)
+
+    def again(carry):
+        step, _, trips = carry
+        return (trips == 0) | ((trips == 1) & (jnp.max(jnp.abs(step.d)) <= xtol))
+
+    step, bound_multipliers, _ = jax.lax.while_loop(again, solve, (last, jnp.zeros(2 * y.shape[0]), jnp.asarray(0)))
+    return step, bound_multipliers
+
+
 def _active_matrix(jet, rows, fixed):
     """(m + n, n) the gradients of the constraint ``rows`` (m,) and of the bounds of the
     ``fixed`` variables (n,), the others zeroed."""
@@ -383,12 +408,20 @@ def _bend(jet, d, rows, fixed):
     return -jnp.linalg.pinv(matrix, rtol=DESIGN_NULL_SPACE_RTOL) @ jnp.concatenate([bent, jnp.zeros(d.shape[0])])
 
 
-def _least_curvature(jet, step: _Step, bound_multipliers, weight, n_targets):
+def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_targets):
     """(e, v, w): the least eigenvalue e of the Hessian of the Lagrangian on the null
     space of the strongly active constraints (targets, limits and bounds with a positive
     multiplier), relative to the Hessian's largest eigenvalue modulus (plus 1; about 2
-    where that null space is empty), its eigenvector v (n,), scaled to a largest entry of
-    1, and its second-order correction w (n,) on those constraints (:func:`_bend`)."""
+    where that null space is empty); the direction v (n,) to leave or probe the point
+    along, scaled to a largest entry of 1: e's eigenvector where e is negative beyond
+    DESIGN_CURVATURE_TOL, else a combination of all the eigenvectors whose curvature is
+    at most DESIGN_FLAT_CURVATURE, or at most the curvature along the ``approach`` (n,),
+    the direction the steps came from where they came only linearly (else 0), weighted
+    1, 2, 3, ... A probe along the least eigenvector alone missed y^3 beside a variable
+    the objective does not depend on: it probed along that variable (curvature 0), not
+    along y (where the steps' approach left a curvature of 6 y, small but not 0), and
+    called y = 0 a minimum. w (n,) is v's second-order correction on those constraints
+    (:func:`_bend`)."""
     hessian = _lagrangian_hessian(jet, step.multipliers, weight)
     strong = step.multipliers > DESIGN_ACTIVE_MULTIPLIER
     strong = strong.at[:n_targets].set(True)
@@ -400,7 +433,12 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, n_targets):
     size = 1.0 + jnp.max(jnp.abs(jnp.linalg.eigvalsh(hessian)))
     # the zeroed columns get curvature 2 size, so that only the null space's count
     eigenvalues, vectors = jnp.linalg.eigh(basis.T @ hessian @ basis + jnp.diag(jnp.where(null, 0.0, 2.0 * size)))
-    v = basis @ vectors[:, 0]
+    along = vectors.T @ (basis.T @ approach)
+    approached = safe_div(jnp.dot(eigenvalues, along**2), jnp.dot(along, along), at_zero=-jnp.inf)
+    flat = eigenvalues <= jnp.maximum(DESIGN_FLAT_CURVATURE * size, approached)
+    flat = flat & (eigenvalues[0] >= -DESIGN_CURVATURE_TOL * size)
+    weights = jnp.where(flat, 1.0 + jnp.arange(eigenvalues.shape[0]), 0.0).at[0].set(1.0)
+    v = basis @ (vectors @ weights)
     v = v / jnp.maximum(jnp.max(jnp.abs(v)), TINY)
     return eigenvalues[0] / size, v, _bend(jet, v, strong, lower | upper)
 
@@ -482,7 +520,10 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         radius = jnp.where(searched & (state.alpha < 1.0), state.alpha * taken, state.radius)
         reached = searched & (state.alpha == 1.0) & (taken >= 0.9 * state.radius)
         radius = jnp.maximum(jnp.where(reached, _RADIUS_GROWTH * state.radius, radius), _RADIUS_FLOOR * xtol)
-        step, bound_multipliers = _step(jet, y, y_max, state.step, state.weight, n_targets, problem.objective is not None, radius)
+        if problem.objective is not None:
+            step, bound_multipliers = _settled_step(jet, y, y_max, state.step, state.weight, n_targets, radius, xtol)
+        else:  # the Hessians are not used (see _jet): one solve
+            step, bound_multipliers = _step(jet, y, y_max, state.step, state.weight, n_targets, False, radius)
         nu = jnp.maximum(state.nu, 2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0))
         merit = _merit(jet, state.weight, nu, n_targets)
         gradient = state.weight * jet.J[0]
@@ -491,11 +532,12 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         slope = jnp.dot(gradient, step.d) - nu * (_violation(jet.v[1:], n_targets) - step.linear_violation)
         slope = jnp.minimum(slope, 0.0)
         stationary = jnp.max(jnp.abs(step.d)) <= xtol
+        linear = jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d))
         # Only a stationary point's curvature is read: its SVD and eigenvalues run only there.
         curvature, v, w = where_needed(
             stationary & (problem.objective is not None),
             lambda operands: _least_curvature(*operands, n_targets),
-            (jet, step, bound_multipliers, state.weight),
+            (jet, step, bound_multipliers, state.weight, jnp.where(linear, step.d, 0.0)),
             (jnp.ones(()), jnp.zeros(n), jnp.zeros(n)),
         )
         # Leave a saddle downhill (or, where flat, towards the side with more room).
@@ -510,7 +552,6 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         # quadratically), is probed on both sides before it is accepted (a stationary start
         # too: no steps tell how it was approached). Without an objective there is no
         # minimum to confirm, nor a direction to probe (every probe tried the point itself).
-        linear = jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d))
         flat = (curvature <= DESIGN_FLAT_CURVATURE) | linear
         probe = stationary & ~saddle & flat & (state.escapes < DESIGN_ESCAPES) & (problem.objective is not None)
         phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)

@@ -163,6 +163,29 @@ def test_a_flat_maximum_is_left():
     assert result.outputs["f"] == pytest.approx(-1.0, abs=1e-12)
 
 
+def cube_of_y(v):
+    return {"f": v["y"] ** 3, "r2": v["x"] ** 2 + v["y"] ** 2}
+
+
+@pytest.mark.parametrize(
+    "start, disk, expected_y",
+    [((0.5, 0.0), False, -2.0), ((0.0, 0.0), False, -2.0), ((0.5, 1e-6), False, -2.0), ((0.5, 0.0), True, -1.0)],
+)
+def test_a_cubic_saddle_beside_an_ignored_variable_is_left(start, disk, expected_y):
+    """minimise y^3 on [-2, 2]^2 (x enters nothing), or inside the disk x^2 + y^2 <= 1:
+    y = 0 is no minimum (y^3 falls on its negative side), and the minimum is y = -2
+    (inside the disk: (0, -1)). The steps approach y = 0 linearly (Newton halves y^3's y),
+    and the probe of the point went along x alone, whose curvature (0) is below y's
+    (6 y): "successful" at y = 0."""
+    problem = Problem(cube_of_y, [Variable("x", -2.0, 2.0, start=start[0]), Variable("y", -2.0, 2.0, start=start[1])],
+                      limits=[Limit("r2", upper=1.0)] if disk else [], objective=Objective("f", "min"))
+    result = solve(problem)
+    assert result.status == "successful"
+    assert result.parameters["y"] == pytest.approx(expected_y, abs=1e-9)
+    if disk:
+        assert result.parameters["x"] == pytest.approx(0.0, abs=1e-6)
+
+
 def sum_on_circle(v):
     return {"sum": v["x"] + v["y"], "radius2": v["x"] ** 2 + v["y"] ** 2}
 
