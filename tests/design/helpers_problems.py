@@ -336,6 +336,20 @@ HOCK_SCHITTKOWSKI = [
         [(-BOX, BOX)] * 5, [2.5, 0.5, 2.0, -1.0, 0.5], [1.0] * 5, 0.0,
         h=[lambda x: x[0] + 3.0 * x[1] - 4.0, lambda x: x[2] + x[3] - 2.0 * x[4], lambda x: x[1] - x[4]],
     ),
+    # hs056's optimum: sin^2 x4 = 2.4 / 4.2, sin^2 x5 = sin^2 x6 = 1.2 / 4.2, x7 = pi / 2
+    # (h1 to h4 with the book's x1, x2, x3), f* = -2.4 * 1.2 * 1.2.
+    Published(
+        "hs056", lambda x: -x[0] * x[1] * x[2], [(-BOX, BOX)] * 7,
+        [1.0, 1.0, 1.0] + [math.asin(math.sqrt(1.0 / 4.2))] * 3 + [math.asin(math.sqrt(5.0 / 7.2))],
+        [2.4, 1.2, 1.2, math.asin(math.sqrt(4.0 / 7.0))] + [math.asin(math.sqrt(2.0 / 7.0))] * 2 + [math.pi / 2.0],
+        -3.456,
+        h=[
+            lambda x: x[0] - 4.2 * jnp.sin(x[3]) ** 2,
+            lambda x: x[1] - 4.2 * jnp.sin(x[4]) ** 2,
+            lambda x: x[2] - 4.2 * jnp.sin(x[5]) ** 2,
+            lambda x: x[0] + 2.0 * x[1] + 2.0 * x[2] - 7.2 * jnp.sin(x[6]) ** 2,
+        ],
+    ),
     # hs063 and hs072: x* and f* are the book's optima polished by Newton's method on the
     # KKT equations of their active set (both rows) at 40 digits (mpmath, independent of
     # magdesign); the published 12-digit x* of hs072 lie 2e-6 (relative) from that point.
