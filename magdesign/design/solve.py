@@ -178,7 +178,15 @@ def _evaluate(problem: Problem, y, theta):
     x = lower + scale * y
     n_rows = len(problem.targets) + len(problem.limit_rows)
     fixed = {name: theta[n_rows + j] for j, name in enumerate(problem.fixed_names)}
-    outputs = problem.model({v.name: x[i] for i, v in enumerate(problem.variables)} | fixed)
+    inputs = {v.name: x[i] for i, v in enumerate(problem.variables)} | fixed
+    try:
+        outputs = problem.model(inputs)
+    except KeyError as error:
+        name = error.args[0] if error.args else None
+        if isinstance(name, str) and name not in inputs:
+            raise ValueError(f"{name}: the model reads an input that is neither a variable nor fixed "
+                             f"(inputs: {sorted(inputs)})") from error
+        raise
     missing = [name for name in problem.outputs if name not in outputs]
     if missing:
         raise ValueError(f"{missing[0]}: not an output of the model (outputs: {sorted(outputs)})")

@@ -267,6 +267,8 @@ def test_bad_configuration_names_the_argument():
         solve(Problem(field_model, [Variable("gap", 1 * mm, 5 * mm)], [Target("nonsense", 1.0)]))
     with pytest.raises(ValueError, match="duplicate"):
         Problem(field_model, [Variable("gap", 1 * mm, 5 * mm)] * 2, [Target("field", 1.0)])
+    with pytest.raises(ValueError, match="remanence: the model reads an input"):
+        solve(Problem(lambda v: {"field": v["gap"] * v["remanence"]}, [Variable("gap", 1 * mm, 5 * mm)], [Target("field", 1.0)]))
     with pytest.raises(ValueError, match="scale"):
         Target("field", 0.0)
 
