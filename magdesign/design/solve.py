@@ -417,19 +417,21 @@ def _bend(jet, d, rows, fixed):
 
 
 def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_targets):
-    """(e, v, w): the least eigenvalue e of the Hessian of the Lagrangian on the null
-    space of the strongly active constraints (targets, limits and bounds with a positive
-    multiplier), relative to the Hessian's largest eigenvalue modulus (plus 1; about 2
-    where that null space is empty); the direction v (n,) to leave or probe the point
-    along, scaled to a largest entry of 1: e's eigenvector where e is negative beyond
-    DESIGN_CURVATURE_TOL, else a combination of all the eigenvectors whose curvature is
-    at most DESIGN_FLAT_CURVATURE, or at most the curvature along the ``approach`` (n,),
-    the direction the steps came from where they came only linearly (else 0), weighted
-    1, 2, 3, ... A probe along the least eigenvector alone missed y^3 beside a variable
-    the objective does not depend on: it probed along that variable (curvature 0), not
-    along y (where the steps' approach left a curvature of 6 y, small but not 0), and
-    called y = 0 a minimum. w (n,) is v's second-order correction on those constraints
-    (:func:`_bend`)."""
+    """(e, v, w, u, wu): the least eigenvalue e of the Hessian of the Lagrangian on the
+    null space of the strongly active constraints (targets, limits and bounds with a
+    positive multiplier), relative to the Hessian's largest eigenvalue modulus (plus 1;
+    about 2 where that null space is empty); the direction v (n,) to leave or probe the
+    point along: e's eigenvector where e is negative beyond DESIGN_CURVATURE_TOL, else a
+    combination of all the eigenvectors whose curvature is at most
+    DESIGN_FLAT_CURVATURE, weighted 1, 2, 3, ... (a probe along the least eigenvector
+    alone missed y^3 inside a disk beside a variable x that the objective ignores: it
+    probed along x); the probe's second direction u (n,): the ``approach`` (the
+    direction the steps came from where they came only linearly, else 0) on that null
+    space, 0 where it is v's. The steps' approach to y^3's 0 leaves y a curvature of
+    6 y, small but above the flat one's; mixed into v, a curved direction's quadratic
+    rise hid a flat one's cubic fall, so u is probed apart. v and u are scaled to a
+    largest entry of 1; w and wu (n,) are their second-order corrections on those
+    constraints (:func:`_bend`)."""
     hessian = _lagrangian_hessian(jet, step.multipliers, weight)
     strong = step.multipliers > DESIGN_ACTIVE_MULTIPLIER
     strong = strong.at[:n_targets].set(True)
@@ -441,14 +443,16 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_ta
     size = 1.0 + jnp.max(jnp.abs(jnp.linalg.eigvalsh(hessian)))
     # the zeroed columns get curvature 2 size, so that only the null space's count
     eigenvalues, vectors = jnp.linalg.eigh(basis.T @ hessian @ basis + jnp.diag(jnp.where(null, 0.0, 2.0 * size)))
-    along = vectors.T @ (basis.T @ approach)
-    approached = safe_div(jnp.dot(eigenvalues, along**2), jnp.dot(along, along), at_zero=-jnp.inf)
-    flat = eigenvalues <= jnp.maximum(DESIGN_FLAT_CURVATURE * size, approached)
-    flat = flat & (eigenvalues[0] >= -DESIGN_CURVATURE_TOL * size)
+    flat = (eigenvalues <= DESIGN_FLAT_CURVATURE * size) & (eigenvalues[0] >= -DESIGN_CURVATURE_TOL * size)
     weights = jnp.where(flat, 1.0 + jnp.arange(eigenvalues.shape[0]), 0.0).at[0].set(1.0)
     v = basis @ (vectors @ weights)
     v = v / jnp.maximum(jnp.max(jnp.abs(v)), TINY)
-    return eigenvalues[0] / size, v, _bend(jet, v, strong, lower | upper)
+    u = basis @ (basis.T @ approach)
+    u = u / jnp.maximum(jnp.max(jnp.abs(u)), TINY)
+    parallel = jnp.abs(jnp.dot(u, v)) >= _PARALLEL * jnp.linalg.norm(u) * jnp.linalg.norm(v)
+    u = jnp.where(parallel, 0.0, u)
+    fixed = lower | upper
+    return eigenvalues[0] / size, v, _bend(jet, v, strong, fixed), u, _bend(jet, u, strong, fixed)
 
 
 def _room(y, v, y_max):
@@ -471,6 +475,8 @@ _PROBE_FIRST, _PROBE_SHRINK, _PROBE_LAST = 1.0, 1.0 / 8.0, 1.0 / 512.0
 # with the Hessian at the last point's multipliers) counted as linear, and the probe of its
 # optimum took a point a box width away, lower in the merit but grossly infeasible.
 _LINEAR_RATE = 0.25
+# A probe's second direction within this cosine of its first adds nothing.
+_PARALLEL = 0.99
 
 
 class _State(eqx.Module):
@@ -486,7 +492,8 @@ class _State(eqx.Module):
     _HISTORY accepted points of the search (the first this one's; along a direction
     that is no descent, ``merit`` alone). ``radius`` bounds the subproblem's step
     (:data:`_RADIUS_GROWTH`). ``nu`` is the merit's penalty, ``weight`` the objective's
-    scale."""
+    scale. ``second`` (0 where none) is the direction a probe tries once ``direction``
+    has failed, with its ``second_correction``."""
 
     phase: Int[Array, ""]
     y: Float[Array, " n"]
@@ -509,6 +516,8 @@ class _State(eqx.Module):
     radius: Float[Array, ""]
     history: Float[Array, " h"]
     bend_first: Bool[Array, ""]
+    second: Float[Array, " n"]
+    second_correction: Float[Array, " n"]
 
 
 def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -> "_Loop":
@@ -546,11 +555,12 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         stationary = jnp.max(jnp.abs(step.d)) <= xtol
         linear = jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d))
         # Only a stationary point's curvature is read: its SVD and eigenvalues run only there.
-        curvature, v, w = where_needed(
+        approach = jnp.where(linear, step.d, 0.0)
+        curvature, v, w, u, wu = where_needed(
             stationary & (problem.objective is not None),
             lambda operands: _least_curvature(*operands, n_targets),
-            (jet, step, bound_multipliers, state.weight, jnp.where(linear, step.d, 0.0)),
-            (jnp.ones(()), jnp.zeros(n), jnp.zeros(n)),
+            (jet, step, bound_multipliers, state.weight, approach),
+            (jnp.ones(()), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n)),
         )
         # Leave a saddle downhill (or, where flat, towards the side with more room).
         v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
@@ -569,7 +579,8 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)
         return eqx.tree_at(
             lambda s: (s.phase, s.y, s.jet, s.step, s.bound_multipliers, s.direction, s.correction, s.alpha, s.merit,
-                       s.slope, s.curvature, s.nu, s.bent, s.escapes, s.radius, s.history, s.bend_first),
+                       s.slope, s.curvature, s.nu, s.bent, s.escapes, s.radius, s.history, s.bend_first,
+                       s.second, s.second_correction),
             state,
             (
                 phase,
@@ -591,6 +602,8 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
                 # after an escape or a probe
                 jnp.where((nu > state.nu) | ~searched, -jnp.inf, jnp.roll(state.history, 1)).at[0].set(merit),
                 searched & state.bent,
+                jnp.where(probe, u, 0.0),
+                jnp.where(probe, wu, 0.0),
             ),
         )
 
@@ -664,6 +677,13 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         given_up = jnp.select([state.phase == ESCAPE, probing], [NOT_MINIMUM, CONVERGED], STALLED)
         failed = eqx.tree_at(lambda s: s.phase, shorter, given_up)
         too_short = jnp.abs(next_alpha) < jnp.where(probing, _PROBE_LAST, _SHORTEST_STEP)
+        # A probe that found nothing along its direction tries its second, if it has one.
+        turned = eqx.tree_at(
+            lambda s: (s.direction, s.correction, s.alpha, s.second, s.second_correction),
+            shorter,
+            (state.second, state.second_correction, jnp.asarray(_PROBE_FIRST), jnp.zeros(n), jnp.zeros(n)),
+        )
+        failed = _pick(probing & jnp.any(state.second != 0.0), turned, failed)
         searched = _pick(good, accepted, _pick(too_short, failed, shorter))
         return _pick(start, _pick(flat, nudged, _pick(finite, accepted, not_started)), searched)
 
@@ -694,6 +714,8 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         radius=jnp.asarray(jnp.inf),
         history=jnp.full(_HISTORY, -jnp.inf),
         bend_first=jnp.asarray(False),
+        second=jnp.zeros(n),
+        second_correction=jnp.zeros(n),
     )
     newton = _newton(settings)
 

@@ -176,7 +176,7 @@ def test_a_cubic_saddle_beside_an_ignored_variable_is_left(start, disk, expected
     y = 0 is no minimum (y^3 falls on its negative side), and the minimum is y = -2
     (inside the disk: (0, -1)). The steps approach y = 0 linearly (Newton halves y^3's y),
     and the probe of the point went along x alone, whose curvature (0) is below y's
-    (6 y): "successful" at y = 0."""
+    (6 y): "successful" at y = 0. Now the probe tries the steps' approach too."""
     problem = Problem(cube_of_y, [Variable("x", -2.0, 2.0, start=start[0]), Variable("y", -2.0, 2.0, start=start[1])],
                       limits=[Limit("r2", upper=1.0)] if disk else [], objective=Objective("f", "min"))
     result = solve(problem)
@@ -184,6 +184,38 @@ def test_a_cubic_saddle_beside_an_ignored_variable_is_left(start, disk, expected
     assert result.parameters["y"] == pytest.approx(expected_y, abs=1e-9)
     if disk:
         assert result.parameters["x"] == pytest.approx(0.0, abs=1e-6)
+
+
+def cube_beside_a_bowl(v):
+    return {"f": v["y"] ** 3 + 100.0 * v["z"] ** 2}
+
+
+def cube_beside_an_indefinite_bowl(v):
+    s, r, u, w = v["s"], v["r"], v["u"], v["w"]
+    return {"f": s**2 + 2.0 * r**2 - u**2 + 3.0 * s * u + 3.0 * r * u + w**3, "u1": u + 1.0}
+
+
+@pytest.mark.parametrize(
+    "model, start, targets, expected",
+    [
+        # the start's one step (along z, curvature 200) looks like a linear approach
+        (cube_beside_a_bowl, {"y": 0.0, "z": 1e-8}, [], {"y": -1.0, "z": 0.0}),
+        # s and r approach 0 linearly (the Hessian's moduli make the steps inexact), u held at 0
+        (cube_beside_an_indefinite_bowl, {"s": 0.5, "r": 0.5, "u": 0.0, "w": 0.0}, [Target("u1", 1.0)],
+         {"s": 0.0, "r": 0.0, "u": 0.0, "w": -1.0}),
+    ],
+)
+def test_a_curved_approach_does_not_hide_a_flat_direction(model, start, targets, expected):
+    """A probe along the flat direction (y, w: cubic) mixed with the curved direction the
+    steps came from (z, or s and r) rose quadratically on both sides of the point and
+    found nothing: it was "successful" at y = 0 (w = 0). The flat directions and the
+    approach are probed apart. Minima found by hand: the cube falls to its bound -1."""
+    problem = Problem(model, [Variable(name, -1.0, 1.0, start=value) for name, value in start.items()],
+                      targets=targets, objective=Objective("f", "min"))
+    result = solve(problem)
+    assert result.status == "successful"
+    for name, value in expected.items():
+        assert result.parameters[name] == pytest.approx(value, abs=1e-6), name
 
 
 def sum_on_circle(v):
