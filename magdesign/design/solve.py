@@ -28,9 +28,9 @@ to its target or limit. It has two stages:
    most DESIGN_ESCAPES times, then "not_a_minimum"). A stationary point whose least
    curvature is too small to tell (x^3 at 0), or which the steps reached only linearly
    (a stationary start too, which no steps reached), is probed on both sides of a
-   direction that combines all its flat ones (:func:`_least_curvature`) at a few lengths
-   before it is accepted; a problem without objective has no minimum to confirm and is
-   not probed.
+   direction that combines all its flat ones, then of the steps' approach
+   (:func:`_least_curvature`), at a few lengths before it is accepted; a problem without
+   objective has no minimum to confirm and is not probed.
    This stage is ours because it chooses the active set, which no JAX library does:
    optimistix's solvers take no constraints or bounds, and jaxopt's bounded QP (BoxOSQP)
    is too inexact for it (measured in benchmarks/design.py).
@@ -554,8 +554,8 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         slope = jnp.minimum(slope, 0.0)
         stationary = jnp.max(jnp.abs(step.d)) <= xtol
         linear = jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d))
-        # Only a stationary point's curvature is read: its SVD and eigenvalues run only there.
         approach = jnp.where(linear, step.d, 0.0)
+        # Only a stationary point's curvature is read: its SVD and eigenvalues run only there.
         curvature, v, w, u, wu = where_needed(
             stationary & (problem.objective is not None),
             lambda operands: _least_curvature(*operands, n_targets),
