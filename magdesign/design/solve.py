@@ -451,8 +451,9 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_ta
     u = u / jnp.maximum(jnp.max(jnp.abs(u)), TINY)
     parallel = jnp.abs(jnp.dot(u, v)) >= _PARALLEL * jnp.linalg.norm(u) * jnp.linalg.norm(v)
     u = jnp.where(parallel, 0.0, u)
-    fixed = lower | upper
-    return eigenvalues[0] / size, v, _bend(jet, v, strong, fixed), u, _bend(jet, u, strong, fixed)
+    # both corrections from one pseudo-inverse: under vmap it depends on neither direction
+    w, wu = jax.vmap(lambda d: _bend(jet, d, strong, lower | upper))(jnp.stack([v, u]))
+    return eigenvalues[0] / size, v, w, u, wu
 
 
 def _room(y, v, y_max):
