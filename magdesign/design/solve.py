@@ -87,6 +87,7 @@ from magdesign._numerics import (
     DESIGN_BATCH_MEMORY,
     DESIGN_CHAIN,
     DESIGN_CHUNK,
+    DESIGN_CONVEX_CURVATURE,
     DESIGN_CURVATURE_TOL,
     DESIGN_ELASTIC,
     DESIGN_ESCAPES,
@@ -315,15 +316,22 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
     quadratic model of the Lagrangian subject to the linearised rows and the box, each
     target row relaxed by two elastic slacks and each limit row by one, costing
     DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits), |d_i| <= radius.
-    Without an objective the quadratic term is |d|^2 / 2 (the minimum-norm step of
-    Gauss-Newton)."""
+    The quadratic term is the Hessian of the Lagrangian with its eigenvalues' moduli,
+    those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except a positive one above
+    DESIGN_CONVEX_CURVATURE, which stays (see there). Without an objective it is
+    |d|^2 / 2 (the minimum-norm step of Gauss-Newton)."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     m = c.shape[0]
     n_limits = m - n_targets
     eigenvalues, vectors = jnp.linalg.eigh(_lagrangian_hessian(jet, multipliers, weight))
     moduli = jnp.abs(eigenvalues)
-    moduli = jnp.maximum(moduli, DESIGN_HESSIAN_FLOOR * (1.0 + jnp.max(moduli)) if has_objective else 1.0)
+    if has_objective:
+        size = 1.0 + jnp.max(moduli)
+        convex = eigenvalues >= DESIGN_CONVEX_CURVATURE * size
+        moduli = jnp.maximum(moduli, jnp.where(convex, 0.0, DESIGN_HESSIAN_FLOOR * size))
+    else:
+        moduli = jnp.maximum(moduli, 1.0)
     n_slack = 2 * n_targets + n_limits
     nw = n + n_slack
     Q = jnp.zeros((nw, nw)).at[:n, :n].set((vectors * moduli) @ vectors.T)
