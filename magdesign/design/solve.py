@@ -360,16 +360,24 @@ def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective, radius):
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     n_limits = c.shape[0] - n_targets
-    qp = solve_qp(*subproblem(jet, y, y_max, last.multipliers, weight, n_targets, has_objective, radius),
-                  guess=last.qp_rows, box=subproblem_box(n, n_targets, n_limits))
+    Q, q, A, b, G, h = subproblem(jet, y, y_max, last.multipliers, weight, n_targets, has_objective, radius)
+    qp = solve_qp(Q, q, A, b, G, h, guess=last.qp_rows, box=subproblem_box(n, n_targets, n_limits))
     # A subproblem that failed (non-finite) offers no step; the polish then judges the point.
     qp = jax.tree.map(lambda a: jnp.where(jnp.isfinite(a), a, 0.0) if a.dtype == jnp.float64 else a, qp)
     d = qp.w[:n]
     limit_multipliers, upper_multipliers, lower_multipliers = jnp.split(qp.z[: n_limits + 2 * n], [n_limits, n_limits + n])
     linearised = c + J_c @ d
     if has_objective:
-        active = (limit_multipliers, lower_multipliers, upper_multipliers)
-        active_limits, at_lower, at_upper = (multiplier > DESIGN_ACTIVE_MULTIPLIER for multiplier in active)
+        # An inactive row's multiplier is the interior-point method's residual over the row's
+        # slack, so a row counts as active only where its multiplier exceeds its slack too:
+        # beside multipliers of 1e6 (hs055's six dependent targets) the lower bound of a
+        # variable 0.017 inside the box got a multiplier of 3e-8, and the polish held the
+        # variable on it.
+        limit_slack, upper_slack, lower_slack = jnp.split((h - G @ qp.w)[: n_limits + 2 * n], [n_limits, n_limits + n])
+        active = ((limit_multipliers, limit_slack), (lower_multipliers, lower_slack), (upper_multipliers, upper_slack))
+        active_limits, at_lower, at_upper = (
+            multiplier > jnp.maximum(DESIGN_ACTIVE_MULTIPLIER, slack) for multiplier, slack in active
+        )
         at_lower, at_upper = at_lower & (y <= radius), at_upper & (y_max - y <= radius)
     else:
         active_limits = linearised[n_targets:] >= -DESIGN_ON_CONSTRAINT

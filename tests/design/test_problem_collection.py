@@ -14,7 +14,7 @@ import pytest
 
 from magdesign.design import DesignStatus, Limit, Objective, Problem, Target, Variable, solve
 from magdesign.design.report import STATUS_NAMES
-from helpers_problems import HOCK_SCHITTKOWSKI
+from helpers_problems import HOCK_SCHITTKOWSKI, Published
 
 TOL = 1e-6
 EXAMPLES = Path(__file__).parents[2] / "examples"
@@ -187,6 +187,39 @@ def test_a_degenerate_minimum_is_found(name):
     assert result.status == "successful", (result.status, result.parameters)
     for k, value in expected.items():
         assert result.parameters[k] == pytest.approx(value, abs=1e-6), k
+
+
+HS055_FROM_ITS_OTHER_MINIMUM = Published(
+    "hs055", lambda x: x[0] + 2.0 * x[1] + 4.0 * x[4] + jnp.exp(x[0] * x[3]),
+    [(0.0, 1.0), (0.0, 100.0), (0.0, 100.0), (0.0, 1.0), (0.0, 100.0), (0.0, 100.0)],
+    [1.0, 2.3886625868024174, 0.12140507965213132, 0.0, 0.08881893317062156, 2.440728065086827],
+    [1.0, 5.0 / 3.0, 1.0 / 3.0, 0.0, 1.0 / 3.0, 5.0 / 3.0], 20.0 / 3.0,
+    h=[
+        lambda x: x[0] + 2.0 * x[1] + 5.0 * x[4] - 6.0,
+        lambda x: x[0] + x[1] + x[2] - 3.0,
+        lambda x: x[3] + x[4] + x[5] - 2.0,
+        lambda x: x[0] + x[3] - 1.0,
+        lambda x: x[1] + x[4] - 2.0,
+        lambda x: x[2] + x[5] - 2.0,
+    ],
+)
+
+
+def test_an_inactive_bound_beside_dependent_targets_is_not_held():
+    """hs055 (six linear targets of rank 5, in six variables) from a start perturbed from
+    its published one. Its feasible set is the segment x = (1 - t, (5 - t) / 3, (1 + 4 t) / 3,
+    t, (1 + t) / 3, (5 - 4 t) / 3), t in [0, 1], where f = 17 / 3 - t / 3 + exp(t - t^2): local
+    minima at both ends (f'(0) = 2 / 3 > 0), the book's at t = 1 (f = 19 / 3), and t = 0
+    (f = 20 / 3), where the steps go. There the QP's dependent targets held multipliers of
+    1e6, and x2's lower bound, 5 / 3 away, a multiplier of 3e-8 (the interior-point
+    method's residual), above the 1e-8 that counted it active: the polish held x2 on it and
+    the result was "infeasible_target" with every target 1e-5 off."""
+    result = solve(HS055_FROM_ITS_OTHER_MINIMUM.problem())
+    assert result.status == "successful", (result.status, result.parameters)
+    x = [result.parameters[f"x{i + 1}"] for i in range(6)]
+    np.testing.assert_allclose(x, HS055_FROM_ITS_OTHER_MINIMUM.optimum, rtol=1e-9, atol=1e-9)
+    assert result.outputs["f"] == pytest.approx(20.0 / 3.0, rel=1e-12)
+    assert result.active_bounds == {"x1": "upper", "x4": "lower"}
 
 
 def cube_of_y(v):
