@@ -118,6 +118,9 @@ _SHORTEST_STEP = 1e-12
 # to, doubled after each whole step that reaches it, never below _RADIUS_FLOOR times the
 # step tolerance.
 _RADIUS_GROWTH, _RADIUS_FLOOR = 2.0, 10.0
+# Without an objective, the radius grows only after a step that gained more than this
+# fraction of the merit's decrease that its linearisation promised (see accept).
+_GROWTH_GAIN = 0.75
 # The line search compares a step's merit with the largest of the last _HISTORY accepted
 # points' (nonmonotone, Grippo, Lampariello and Lucidi 1986).
 _HISTORY = 8
@@ -557,6 +560,28 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         taken = jnp.max(jnp.abs(state.direction))
         radius = jnp.where(searched & (state.alpha < 1.0), state.alpha * taken, state.radius)
         reached = searched & (state.alpha == 1.0) & (taken >= 0.9 * state.radius)
+        stuck = jnp.asarray(False)
+        if problem.objective is None:
+            # Without an objective the QP knows no curvature of the rows: next to the point
+            # closest to a target that no point meets (sin x = 2 near pi / 2, x^2 = -1 at 0)
+            # its steps overshot that point by the radius, to and fro, and the nonmonotone
+            # merit took them: "max_steps_reached" after 100 evaluations. A step taken
+            # uphill, beyond which the violation rises again (its gradient there points
+            # along the step), overshot: it halves the radius, and one so taken at the
+            # radius's floor leaves no shorter step to try: the point is stationary.
+            # (Overshooting alone, downhill too, halved the radius along Powell's badly
+            # scaled system, whose nearly met rows change sign from step to step: 60
+            # steps where 19 did.) The radius grows only after a step that gained at least
+            # _GROWTH_GAIN of the merit's decrease that its linearisation promised (on x^2's
+            # way to 0 a step of half the distance gains 3/4 of it).
+            c = jet.v[1:]  # the violation's gradient, from the rows that _violation counts
+            target = jnp.arange(c.shape[0]) < n_targets
+            signs = jnp.where(target, jnp.sign(c), 1.0) * (jnp.where(target, jnp.abs(c), c) > _MET_ROW)
+            gained = state.merit - _merit(jet, state.weight, state.nu, n_targets)
+            overshot = searched & (gained < 0.0) & (jnp.dot(signs @ jet.J[1:], state.direction) > 0.0)
+            stuck = overshot & (state.alpha * taken <= _RADIUS_FLOOR * xtol)
+            reached = reached & ~overshot & (gained >= -_GROWTH_GAIN * state.alpha * state.slope)
+            radius = jnp.where(overshot, 0.5 * state.alpha * taken, radius)
         radius = jnp.maximum(jnp.where(reached, _RADIUS_GROWTH * state.radius, radius), _RADIUS_FLOOR * xtol)
         if problem.objective is not None:
             step, bound_multipliers = _settled_step(jet, y, y_max, state.step, state.weight, n_targets, radius, xtol)
@@ -569,7 +594,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         # step which is no descent direction (an inexact subproblem) is taken only downhill.
         slope = jnp.dot(gradient, step.d) - nu * (_violation(jet.v[1:], n_targets) - step.linear_violation)
         slope = jnp.minimum(slope, 0.0)
-        stationary = jnp.max(jnp.abs(step.d)) <= xtol
+        stationary = (jnp.max(jnp.abs(step.d)) <= xtol) | stuck
         linear = jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d))
         approach = jnp.where(linear, step.d, 0.0)
         # Only a stationary point's curvature is read: its SVD and eigenvalues run only there.

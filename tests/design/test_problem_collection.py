@@ -222,6 +222,55 @@ def test_an_inactive_bound_beside_dependent_targets_is_not_held():
     assert result.active_bounds == {"x1": "upper", "x4": "lower"}
 
 
+UNREACHABLE = {
+    # model, variables (name, lower, upper), target or limit, the point of least violation
+    "x^2 = -1": (lambda v: {"q": v["x"] ** 2}, [("x", -2.0, 2.0)], Target("q", -1.0), {"x": 0.0}),
+    "sin x = 2": (lambda v: {"q": jnp.sin(v["x"])}, [("x", -3.0, 3.0)], Target("q", 2.0), {"x": math.pi / 2}),
+    "cos x = 1.5": (lambda v: {"q": jnp.cos(v["x"])}, [("x", -1.0, 2.0)], Target("q", 1.5), {"x": 0.0}),
+    "x^2 + y^2 = -1": (lambda v: {"q": v["x"] ** 2 + v["y"] ** 2}, [("x", -2.0, 2.0), ("y", -1.0, 1.0)],
+                       Target("q", -1.0), {"x": 0.0, "y": 0.0}),
+    "x^2 <= -1": (lambda v: {"q": v["x"] ** 2}, [("x", -2.0, 2.0)], Limit("q", upper=-1.0), {"x": 0.0}),
+}
+
+
+@pytest.mark.parametrize("name", UNREACHABLE)
+def test_a_target_that_no_point_meets_is_reported_as_such(name):
+    """Without an objective, from the box's middle: a target (or limit) that no point
+    meets, whose violation is least inside the box. The QP's steps, which know no
+    curvature of the rows there, overshot that point by the radius to and fro, and the
+    search ended "max_steps_reached" after 100 evaluations; it now ends there, with the
+    status that names the unmet row."""
+    model, variables, row, closest = UNREACHABLE[name]
+    is_target = isinstance(row, Target)
+    problem = Problem(model, [Variable(*v) for v in variables], targets=[row] if is_target else [],
+                      limits=[] if is_target else [row])
+    result = solve(problem)
+    assert result.status == ("infeasible_target" if is_target else "limit_violated")
+    assert result.violated == ("q" if is_target else "q.upper",)
+    for k, value in closest.items():
+        assert result.parameters[k] == pytest.approx(value, abs=1e-4), k
+
+
+def powell_badly_scaled(v):
+    return {"a": 1e4 * v["x"] * v["y"], "b": jnp.exp(-v["x"]) + jnp.exp(-v["y"])}
+
+
+@pytest.mark.parametrize("start", [(0.1, 0.1), (0.2, 0.2), (0.0, 1.0), (5.0, 5.0)])
+def test_powells_badly_scaled_system_is_solved(start):
+    """Targets only: 1e4 x y = 1, exp(-x) + exp(-y) = 1.0001 on [0, 10]^2 (Powell 1970; the
+    published root is (1.098159e-5, 9.106146), or its mirror). Its nearly met rows change
+    sign from step to step: where that alone counted as overshooting the point of least
+    violation and halved the radius, the search crawled and ended "max_steps_reached"
+    from (0.1, 0.1) and (0.2, 0.2) (a reviewer's find, before that rule was committed)."""
+    problem = Problem(powell_badly_scaled, [Variable("x", 0.0, 10.0, start=start[0]), Variable("y", 0.0, 10.0, start=start[1])],
+                      targets=[Target("a", 1.0), Target("b", 1.0001)])
+    result = solve(problem)
+    assert result.status == "successful", (result.status, result.steps)
+    root = sorted([result.parameters["x"], result.parameters["y"]])
+    # the root by mpmath's findroot at 40 digits (independent of magdesign)
+    np.testing.assert_allclose(root, [1.098159329699817e-5, 9.106146739866524], rtol=1e-9)
+
+
 def cube_of_y(v):
     return {"f": v["y"] ** 3, "r2": v["x"] ** 2 + v["y"] ** 2}
 
