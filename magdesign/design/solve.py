@@ -368,7 +368,10 @@ def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective, radius):
     # A subproblem that failed (non-finite) offers no step; the polish then judges the point.
     qp = jax.tree.map(lambda a: jnp.where(jnp.isfinite(a), a, 0.0) if a.dtype == jnp.float64 else a, qp)
     d = qp.w[:n]
-    limit_multipliers, upper_multipliers, lower_multipliers = jnp.split(qp.z[: n_limits + 2 * n], [n_limits, n_limits + n])
+    # each (limit rows, upper bounds, lower bounds): their multipliers, and their slacks after the step
+    (limit_multipliers, upper_multipliers, lower_multipliers), (limit_slack, upper_slack, lower_slack) = (
+        jnp.split(rows[: n_limits + 2 * n], [n_limits, n_limits + n]) for rows in (qp.z, h - G @ qp.w)
+    )
     linearised = c + J_c @ d
     if has_objective:
         # An inactive row's multiplier is the interior-point method's residual over the row's
@@ -376,7 +379,6 @@ def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective, radius):
         # beside multipliers of 1e6 (hs055's six dependent targets) the lower bound of a
         # variable 0.017 inside the box got a multiplier of 3e-8, and the polish held the
         # variable on it.
-        limit_slack, upper_slack, lower_slack = jnp.split((h - G @ qp.w)[: n_limits + 2 * n], [n_limits, n_limits + n])
         active = ((limit_multipliers, limit_slack), (lower_multipliers, lower_slack), (upper_multipliers, upper_slack))
         active_limits, at_lower, at_upper = (
             multiplier > jnp.maximum(DESIGN_ACTIVE_MULTIPLIER, slack) for multiplier, slack in active
@@ -574,11 +576,9 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             # steps where 19 did.) The radius grows only after a step that gained at least
             # _GROWTH_GAIN of the merit's decrease that its linearisation promised (on x^2's
             # way to 0 a step of half the distance gains 3/4 of it).
-            c = jet.v[1:]  # the violation's gradient, from the rows that _violation counts
-            target = jnp.arange(c.shape[0]) < n_targets
-            signs = jnp.where(target, jnp.sign(c), 1.0) * (jnp.where(target, jnp.abs(c), c) > _MET_ROW)
+            rising = jax.grad(_violation)(jet.v[1:], n_targets) @ jet.J[1:]  # the violation's gradient in y
             gained = state.merit - _merit(jet, state.weight, state.nu, n_targets)
-            overshot = searched & (gained < 0.0) & (jnp.dot(signs @ jet.J[1:], state.direction) > 0.0)
+            overshot = searched & (gained < 0.0) & (jnp.dot(rising, state.direction) > 0.0)
             stuck = overshot & (state.alpha * taken <= _RADIUS_FLOOR * xtol)
             reached = reached & ~overshot & (gained >= -_GROWTH_GAIN * state.alpha * state.slope)
             radius = jnp.where(overshot, 0.5 * state.alpha * taken, radius)
