@@ -101,12 +101,14 @@ DESIGN_ELASTIC = 1e6
 #   (which bounds a step where the model is flat to 1e4 box widths, so the QP's own
 #   1e-12 residuals move it by 1e-8 at most);
 DESIGN_HESSIAN_FLOOR = 1e-4
-#   a positive curvature above DESIGN_CONVEX_CURVATURE (relative, as that floor) stays
-#   as it is: raised to the floor, a degenerate minimum's vanishing curvature (x^4 at 0)
-#   turned Newton's steps into gradient steps that crawl, and min x^4 ended
-#   "max_steps_reached" 4e-4 from 0 (Newton's steps there shrink by 2/3 each; the floor
-#   still bounds the flat and concave directions, where a step has no curvature to stop it);
-DESIGN_CONVEX_CURVATURE = 1e-8
+#   a curvature of either sign whose modulus is above DESIGN_KEPT_CURVATURE (relative, as
+#   that floor) keeps its modulus: raised to the floor, a degenerate minimum's vanishing
+#   curvature (x^4 at 0) turned Newton's steps into gradient steps that crawl (min x^4
+#   ended "max_steps_reached" 4e-4 from 0; Newton's steps there shrink by 2/3 each), and so
+#   did a gently concave direction beside a stiff one (hs057's x2, 1e-7 of x1's curvature:
+#   steps of 3e-6 box widths). The floor still bounds the flat directions, where a step has
+#   no curvature to stop it;
+DESIGN_KEPT_CURVATURE = 1e-8
 # - a limit row or bound is active where its QP multiplier exceeds this (with an
 #   objective), or where the step ends within DESIGN_ON_CONSTRAINT of it (without one);
 DESIGN_ACTIVE_MULTIPLIER = 1e-8

@@ -12,8 +12,9 @@ to its target or limit. It has two stages:
    length it shortened the last one to, doubled after each whole step that reaches
    it), with elastic slacks so that the subproblem is always feasible
    (:mod:`magdesign.design._qp`); a backtracking line search on the exact l1 merit
-   function f + nu |violation|_1 accepts the step, along a descent direction against the
-   largest merit of the last few points (nonmonotone, so that a curved constraint's
+   function f + nu |violation|_1 (nu above twice the multipliers, and falling towards
+   them where it is above: Powell's update) accepts the step, along a descent direction
+   against the largest merit of the last few points (nonmonotone, so that a curved constraint's
    higher-order violation does not stop the steps where the objective is flat). A whole
    step that the merit rejects is tried once more along an arc bent by its second-order
    correction, which keeps the active constraints met to second order (from the
@@ -87,13 +88,13 @@ from magdesign._numerics import (
     DESIGN_BATCH_MEMORY,
     DESIGN_CHAIN,
     DESIGN_CHUNK,
-    DESIGN_CONVEX_CURVATURE,
     DESIGN_CURVATURE_TOL,
     DESIGN_ELASTIC,
     DESIGN_ESCAPES,
     DESIGN_FLAT_CURVATURE,
     DESIGN_GRADIENT_FLOOR,
     DESIGN_HESSIAN_FLOOR,
+    DESIGN_KEPT_CURVATURE,
     DESIGN_NULL_SPACE_RTOL,
     DESIGN_ON_CONSTRAINT,
     DESIGN_POINT_SECONDS,
@@ -124,6 +125,10 @@ _GROWTH_GAIN = 0.75
 # The line search compares a step's merit with the largest of the last _HISTORY accepted
 # points' (nonmonotone, Grippo, Lampariello and Lucidi 1986).
 _HISTORY = 8
+# The merit's penalty starts at, and never falls below, this (the objective is scaled to a
+# unit gradient at the start, so its multipliers are O(1)).
+_PENALTY_FLOOR = 1.0
+_NO_POINT = np.stack([np.full(_HISTORY, -np.inf), np.zeros(_HISTORY)], axis=1)  # an empty history
 _ROUNDING = 1e-13
 # Scaled constraint rows within this of their target or limit count as met in the merit
 # function: far below the tolerance on them (DESIGN_RTOL), above their rounding.
@@ -320,8 +325,8 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
     target row relaxed by two elastic slacks and each limit row by one, costing
     DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits), |d_i| <= radius.
     The quadratic term is the Hessian of the Lagrangian with its eigenvalues' moduli,
-    those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except a positive one above
-    DESIGN_CONVEX_CURVATURE, which stays (see there). Without an objective it is
+    those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except one above
+    DESIGN_KEPT_CURVATURE, which stays (see there). Without an objective it is
     |d|^2 / 2 (the minimum-norm step of Gauss-Newton)."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
@@ -331,8 +336,8 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
     moduli = jnp.abs(eigenvalues)
     if has_objective:
         size = 1.0 + jnp.max(moduli)
-        convex = eigenvalues >= DESIGN_CONVEX_CURVATURE * size
-        moduli = jnp.maximum(moduli, jnp.where(convex, 0.0, DESIGN_HESSIAN_FLOOR * size))
+        kept = moduli >= DESIGN_KEPT_CURVATURE * size
+        moduli = jnp.maximum(moduli, jnp.where(kept, 0.0, DESIGN_HESSIAN_FLOOR * size))
     else:
         moduli = jnp.maximum(moduli, 1.0)
     n_slack = 2 * n_targets + n_limits
@@ -509,10 +514,11 @@ class _State(eqx.Module):
     correction on the active constraints (:func:`_bend`; a step is bent where its whole
     length failed straight, ``straight`` then being the merit it reached, or from its
     first try where ``bend_first``, the last step having been bent); ``alpha`` the fraction
-    tried next; the line search asks for a merit below ``max(history) + ARMIJO
-    (alpha slope + alpha^2 curvature)``, ``history`` holding the merits of the last
-    _HISTORY accepted points of the search (the first this one's; along a direction
-    that is no descent, ``merit`` alone). ``radius`` bounds the subproblem's step
+    tried next; the line search asks for a merit below the largest in the ``history``
+    + ARMIJO (alpha slope + alpha^2 curvature), ``history`` holding the weighted objective
+    and the violation of the last _HISTORY accepted points of the search (the first this
+    one's), priced at the present penalty (along a direction that is no descent,
+    ``merit`` alone). ``radius`` bounds the subproblem's step
     (:data:`_RADIUS_GROWTH`). ``nu`` is the merit's penalty, ``weight`` the objective's
     scale. ``second`` (0 where none) is the direction a probe tries once ``direction``
     has failed, with its ``second_correction``."""
@@ -536,7 +542,7 @@ class _State(eqx.Module):
     nudged: Bool[Array, ""]
     steps: Int[Array, ""]
     radius: Float[Array, ""]
-    history: Float[Array, " h"]
+    history: Float[Array, "h 2"]
     bend_first: Bool[Array, ""]
     second: Float[Array, " n"]
     second_correction: Float[Array, " n"]
@@ -587,7 +593,15 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             step, bound_multipliers = _settled_step(jet, y, y_max, state.step, state.weight, n_targets, radius, xtol)
         else:  # the Hessians are not used (see _jet): one solve
             step, bound_multipliers = _step(jet, y, y_max, state.step, state.weight, n_targets, False, radius)
-        nu = jnp.maximum(state.nu, 2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0))
+        # The penalty stays above twice the multipliers and _PENALTY_FLOOR, and where it is
+        # above both falls halfway towards them at each point (Powell's update, as SLSQP's,
+        # floored): after an elastic step (multipliers at DESIGN_ELASTIC) a penalty kept at
+        # 2e6 while the multipliers fell to 2e-3 made the merit of hs069's curved targets'
+        # second-order violation (1e-9) outweigh the objective's decrease: steps of 1e-3 to
+        # and fro, "max_steps_reached". Without the floor the penalty fell with the vanishing
+        # multipliers of hs047's degenerate minimum, and its probe took an infeasible point.
+        need = jnp.maximum(2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0), _PENALTY_FLOOR)
+        nu = jnp.maximum(need, 0.5 * (state.nu + need))
         merit = _merit(jet, state.weight, nu, n_targets)
         gradient = state.weight * jet.J[0]
         # The merit's directional derivative along the step; never above 0, so that a
@@ -640,9 +654,11 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
                 escape | probe,
                 state.escapes + (escape | probe),
                 radius,
-                # a new penalty makes the old merits incomparable; a search restarts its history
-                # after an escape or a probe
-                jnp.where((nu > state.nu) | ~searched, -jnp.inf, jnp.roll(state.history, 1)).at[0].set(merit),
+                # a larger penalty would make the old points' merits lenient; a search restarts
+                # its history then, and after an escape or a probe
+                jnp.where((nu > state.nu) | ~searched, _NO_POINT, jnp.roll(state.history, 1, axis=0)).at[0].set(
+                    jnp.stack([state.weight * jet.v[0], _violation(jet.v[1:], n_targets)])
+                ),
                 searched & state.bent,
                 jnp.where(probe, u, 0.0),
                 jnp.where(probe, wu, 0.0),
@@ -693,7 +709,8 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         merit = _merit(jet, state.weight, state.nu, n_targets)
         # nonmonotone only in the search and along a descent direction (the history's
         # first entry is this point's merit)
-        reference = jnp.where((state.phase == SEARCH) & (state.slope < 0.0), jnp.max(state.history), state.merit)
+        merits = state.history @ jnp.stack([1.0, state.nu])
+        reference = jnp.where((state.phase == SEARCH) & (state.slope < 0.0), jnp.max(merits), state.merit)
         wanted = reference + _ARMIJO * (alpha * state.slope + alpha**2 * state.curvature)
         wanted = jnp.where(probing, state.merit - _ROUNDING * (1.0 + jnp.abs(state.merit)), wanted)
         good = finite & (merit <= wanted)
@@ -746,7 +763,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         merit=jnp.zeros(()),
         slope=jnp.zeros(()),
         curvature=jnp.zeros(()),
-        nu=jnp.asarray(1.0),
+        nu=jnp.asarray(_PENALTY_FLOOR),
         bent=jnp.asarray(False),
         straight=jnp.asarray(0.0),
         weight=jnp.asarray(1.0),
@@ -754,7 +771,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         nudged=jnp.asarray(False),
         steps=jnp.asarray(0),
         radius=jnp.asarray(jnp.inf),
-        history=jnp.full(_HISTORY, -jnp.inf),
+        history=_NO_POINT,
         bend_first=jnp.asarray(False),
         second=jnp.zeros(n),
         second_correction=jnp.zeros(n),

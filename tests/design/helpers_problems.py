@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import jax.numpy as jnp
 import numpy as np
+from jax.scipy.special import ndtr
 
 from magdesign.design import Limit, Objective, Problem, Target, Variable
 
@@ -77,6 +78,14 @@ HS011_X1 = math.cbrt(1.25 + math.sqrt(25.0 / 16.0 + 1.0 / 216.0)) + math.cbrt(1.
 # x1 = 14.095 (the book's value, exactly), and the lower root of the first then x2
 # (the book gives 0.84296079).
 HS019_X2 = 5.0 - math.sqrt(100.0 - 9.095**2)
+
+# hs057's data (the book's a_i and b_i, i = 1..44)
+HS057_A = np.array([8] * 2 + [10] * 4 + [12] * 4 + [14] * 3 + [16] * 3 + [18] * 2 + [20] * 3 + [22] * 3
+                   + [24] * 3 + [26] * 3 + [28] * 2 + [30] * 3 + [32] * 2 + [34] + [36] * 2 + [38] * 2
+                   + [40] + [42], dtype=float)
+HS057_B = np.array([0.49, 0.49, 0.48, 0.47, 0.48, 0.47, 0.46, 0.46, 0.45, 0.43, 0.45, 0.43, 0.43, 0.44, 0.43,
+                    0.43, 0.46, 0.45, 0.42, 0.42, 0.43, 0.41, 0.41, 0.40, 0.42, 0.40, 0.40, 0.41, 0.40, 0.41,
+                    0.41, 0.40, 0.40, 0.40, 0.38, 0.41, 0.40, 0.40, 0.41, 0.38, 0.40, 0.40, 0.39, 0.39])
 
 HOCK_SCHITTKOWSKI = [
     Published("hs001", rosenbrock, [(-BOX, BOX), (-1.5, BOX)], [-2.0, 1.0], [1.0, 1.0], 0.0),
@@ -364,6 +373,26 @@ HOCK_SCHITTKOWSKI = [
         g=[
             lambda x: 0.0401 - 4.0 / x[0] - 2.25 / x[1] - 1.0 / x[2] - 0.25 / x[3],
             lambda x: 0.010085 - 0.16 / x[0] - 0.36 / x[1] - 0.64 / x[2] - 0.64 / x[3],
+        ],
+    ),
+    # hs057 and hs069: the optima of Schittkowski's validated transcription (PROB.FOR, 2011),
+    # 12 digits; the solver before them ended both "max_steps_reached".
+    Published(
+        "hs057",
+        lambda x: jnp.sum(
+            (jnp.asarray(HS057_B) - x[0] - (0.49 - x[0]) * jnp.exp(-x[1] * (jnp.asarray(HS057_A) - 8.0))) ** 2
+        ),
+        [(0.4, BOX), (-4.0, BOX)], [0.42, 5.0], [0.419952674511, 1.28484562930], 0.0284596697213,
+        g=[lambda x: 0.49 * x[1] - x[0] * x[1] - 0.09],
+    ),
+    Published(
+        "hs069",
+        lambda x: (0.4 - x[3] * (1000.0 * jnp.expm1(x[0]) - x[2]) / (jnp.expm1(x[0]) + x[3])) / x[0],
+        [(1e-4, 100.0), (0.0, 100.0), (0.0, 2.0), (0.0, 2.0)], [1.0] * 4,
+        [0.0293714180830, 1.19025343488, 0.233946796758, 0.791667815694], -956.712887064,
+        h=[
+            lambda x: x[2] - 2.0 * ndtr(-x[1]),
+            lambda x: x[3] - ndtr(2.0 - x[1]) - ndtr(-2.0 - x[1]),
         ],
     ),
 ]

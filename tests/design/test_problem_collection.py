@@ -502,3 +502,36 @@ def test_a_search_cut_short_says_max_steps_not_infeasible():
     problem = next(p for p in HOCK_SCHITTKOWSKI if p.name == "hs071").problem()
     result = solve(problem, max_steps=3)
     assert result.status == "max_steps_reached"
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        {"a": 1e-4, "b": 1e4, "x": 0.1, "target": False},
+        {"a": 1e-5, "b": 1e4, "x": 0.5, "target": False},
+        {"a": 1e-3, "b": 1e4, "x": 0.3, "target": True},
+    ],
+)
+def test_a_gently_concave_direction_beside_a_stiff_one_is_followed(case):
+    """minimise b (y - 1/2)^2 - a x^2 on x in [0, 10], y in [0, 1]: the minimum is the
+    bound x = 10 (y = 1/2), down a concave direction whose curvature (2a) is 1e-8 to 1e-9
+    of the stiff one's. With a target, the same along the line x = y: minimise
+    b (x - y)^2 - a (x + y)^2 with x - y + z = 1/10, z in [-1, 1]: (10, 10, 1/10). The
+    QP's Hessian raised the concave curvature to its floor (1e-4 of the largest), and
+    the steps crawled: "max_steps_reached" after 100 evaluations, x below 0.7."""
+    a, b = case["a"], case["b"]
+    variables = [Variable("x", 0.0, 10.0, start=case["x"])]
+    if case["target"]:
+        variables += [Variable("y", 0.0, 10.0, start=0.2), Variable("z", -1.0, 1.0, start=0.0)]
+        model = lambda v: {"f": b * (v["x"] - v["y"]) ** 2 - a * (v["x"] + v["y"]) ** 2,  # noqa: E731
+                           "s": v["x"] - v["y"] + v["z"]}
+        expected = {"x": 10.0, "y": 10.0, "z": 0.1}
+        targets = [Target("s", 0.1, scale=1.0)]
+    else:
+        variables += [Variable("y", 0.0, 1.0, start=0.2)]
+        model = lambda v: {"f": b * (v["y"] - 0.5) ** 2 - a * v["x"] ** 2}  # noqa: E731
+        expected, targets = {"x": 10.0, "y": 0.5}, []
+    result = solve(Problem(model, variables, targets=targets, objective=Objective("f", "min")))
+    assert result.status == "successful", (result.status, result.parameters)
+    for name, value in expected.items():
+        assert result.parameters[name] == pytest.approx(value, rel=0, abs=1e-9)
