@@ -12,8 +12,8 @@ to its target or limit. It has two stages:
    length it shortened the last one to, doubled after each whole step that reaches
    it), with elastic slacks so that the subproblem is always feasible
    (:mod:`magdesign.design._qp`); a backtracking line search on the exact l1 merit
-   function f + nu |violation|_1 (nu above twice the multipliers, and falling towards
-   them where it is above: Powell's update) accepts the step, along a descent direction
+   function f + nu |violation|_1 (nu at least twice the multipliers and 1, falling halfway
+   towards that at each point: Powell's update) accepts the step, along a descent direction
    against the largest merit of the last few points (nonmonotone, so that a curved constraint's
    higher-order violation does not stop the steps where the objective is flat). A whole
    step that the merit rejects is tried once more along an arc bent by its second-order
@@ -593,13 +593,14 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             step, bound_multipliers = _settled_step(jet, y, y_max, state.step, state.weight, n_targets, radius, xtol)
         else:  # the Hessians are not used (see _jet): one solve
             step, bound_multipliers = _step(jet, y, y_max, state.step, state.weight, n_targets, False, radius)
-        # The penalty stays above twice the multipliers and _PENALTY_FLOOR, and where it is
-        # above both falls halfway towards them at each point (Powell's update, as SLSQP's,
-        # floored): after an elastic step (multipliers at DESIGN_ELASTIC) a penalty kept at
-        # 2e6 while the multipliers fell to 2e-3 made the merit of hs069's curved targets'
-        # second-order violation (1e-9) outweigh the objective's decrease: steps of 1e-3 to
-        # and fro, "max_steps_reached". Without the floor the penalty fell with the vanishing
-        # multipliers of hs047's degenerate minimum, and its probe took an infeasible point.
+        # The penalty stays at least max(twice the multipliers, _PENALTY_FLOOR) and falls
+        # halfway towards that at each point (Powell's update, with one penalty for all
+        # rows, where SLSQP keeps one per row, and a floor): after an elastic step
+        # (multipliers at DESIGN_ELASTIC) a penalty kept at 2e6 while the multipliers fell
+        # to 2e-3 made the merit of hs069's curved targets' second-order violation (1e-9)
+        # outweigh the objective's decrease: steps of 1e-3 to and fro, "max_steps_reached".
+        # Without the floor the penalty fell with the vanishing multipliers of hs047's
+        # degenerate minimum, and its probe took an infeasible point.
         need = jnp.maximum(2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0), _PENALTY_FLOOR)
         nu = jnp.maximum(need, 0.5 * (state.nu + need))
         merit = _merit(jet, state.weight, nu, n_targets)
