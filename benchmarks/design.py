@@ -6,6 +6,8 @@ Prints:
 - the default design (the spec `magdesign solve` runs with no argument, its scene model):
   first call (compile included) and the median warm time of one solve, at the Reissner
   dome level and, unless skipped, the axisymmetric one;
+- the same first call at the Reissner level in new processes, as `magdesign solve` makes it:
+  on an empty persistent cache, and three times with the cache the first run filled;
 - a vmapped batch of 10,000 target compliances at the Reissner level, and the same
   10,000 designs solved the usual way without magdesign: scipy's brentq on the same closed
   forms (Reissner's dome compliance for the wall, seed 001 Eq. 1 on the axis for the gap
@@ -18,7 +20,10 @@ Prints:
 """
 
 import importlib
+import os
+import subprocess
 import sys
+import tempfile
 import time
 
 import jax
@@ -61,6 +66,33 @@ def timed_solves(problem, repeats):
         solve(problem)
         times.append(time.perf_counter() - began)
     return first, first_s, float(np.median(times))
+
+
+# One `magdesign solve` at the Reissner level as the command makes it: a new process, the
+# command's persistent cache turned on. Prints the first call's seconds.
+FRESH_PROCESS = """
+import time
+from magdesign.cli import use_compilation_cache
+from magdesign.design import solve
+from magdesign.design.spec import default_spec, problem_from_spec
+use_compilation_cache()
+problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
+began = time.perf_counter()
+result = solve(problem)
+print(time.perf_counter() - began, result.status)
+"""
+
+
+def fresh_process_rows():
+    rows = [("default design, new process", "first call (s)", "status")]
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "MAGDESIGN_CACHE_DIR": cache, "MAGDESIGN_NO_CACHE": ""}
+        for run in range(4):
+            out = subprocess.run([sys.executable, "-c", FRESH_PROCESS], env=env, capture_output=True, text=True,
+                                 check=True)
+            seconds, status = out.stdout.split()
+            rows.append(("empty cache" if run == 0 else f"cache kept, run {run}", f"{float(seconds):.2f}", status))
+    table(rows)
 
 
 def scipy_designs(compliances):
@@ -188,6 +220,8 @@ def qp_rows():
 
 def main():
     design_rows("--skip-axisymmetric" in sys.argv)
+    print()
+    fresh_process_rows()
     print()
     qp_rows()
 

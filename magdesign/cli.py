@@ -14,16 +14,18 @@ the traceback), 2 bad spec or arguments (one line naming the key), 3 solve not s
 (the status and the violated target are printed) or a simulation whose mechanics did not
 converge at some load point.
 
-Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax; see
+Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax/<this CPU>; see
 :func:`cache_directory`; MAGDESIGN_NO_CACHE=1 turns it off).
 """
 
 import argparse
 import csv
+import hashlib
 import importlib.metadata
 import json
 import math
 import os
+import platform
 import sys
 import warnings
 from pathlib import Path
@@ -52,27 +54,45 @@ EXIT_NOT_SOLVED = 3
 CACHE_MIN_COMPILE_SECONDS = 0.5
 
 
+def cpu_tag():
+    """The machine's architecture and a hash of its CPU's instruction-set flags, e.g.
+    "x86_64-3f9a0c2b71de". JAX's cache key leaves the CPU out, and a program compiled on one
+    CPU may use instructions another lacks (a home folder shared by a cluster's machines)."""
+    try:
+        with open("/proc/cpuinfo") as cpuinfo:
+            flags = next((line for line in cpuinfo if line.split(":")[0].strip() in ("flags", "Features")), "")
+    except OSError:
+        flags = platform.processor()
+    return f"{platform.machine()}-{hashlib.sha256(flags.encode()).hexdigest()[:12]}"
+
+
 def cache_directory():
-    """Where the command keeps compiled programs (JAX's persistent compilation cache):
-    $MAGDESIGN_CACHE_DIR, else $XDG_CACHE_HOME/magdesign/jax, else ~/.cache/magdesign/jax;
-    None when MAGDESIGN_NO_CACHE is set to anything but "" or "0"."""
+    """Where the command keeps compiled programs (JAX's persistent compilation cache): the
+    folder :func:`cpu_tag` names in $MAGDESIGN_CACHE_DIR, else in $XDG_CACHE_HOME/magdesign/jax,
+    else in ~/.cache/magdesign/jax; None when MAGDESIGN_NO_CACHE is set to anything but "" or "0"."""
     if os.environ.get("MAGDESIGN_NO_CACHE", "") not in ("", "0"):
         return None
     if os.environ.get("MAGDESIGN_CACHE_DIR"):
-        return Path(os.environ["MAGDESIGN_CACHE_DIR"])
+        return Path(os.environ["MAGDESIGN_CACHE_DIR"]) / cpu_tag()
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "magdesign" / "jax"
+    return Path(base) / "magdesign" / "jax" / cpu_tag()
 
 
-def use_compilation_cache():
+def use_compilation_cache(debug=False):
     """Turn on JAX's persistent compilation cache (see :func:`cache_directory`), so that a
-    second run of the same command reuses the programs the first compiled."""
+    second run of the same command reuses the programs the first compiled. Unless ``debug``,
+    XLA's C++ log is kept to fatal errors: loading a program from the cache logs an error
+    that the compiling CPU's tuning features (such as +prefer-no-gather) are not the host's
+    instructions, "could lead to ... SIGILL", for every program, although it is the same CPU
+    (:func:`cpu_tag`). XLA's failures still reach the command as exceptions."""
     directory = cache_directory()
     if directory is None:
         return
     jax.config.update("jax_compilation_cache_dir", str(directory))
     if "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS" not in os.environ:
         jax.config.update("jax_persistent_cache_min_compile_time_secs", CACHE_MIN_COMPILE_SECONDS)
+    if not debug:
+        jax.config.update("jax_logging_level", "CRITICAL")
 
 
 def build_parser():
@@ -203,7 +223,7 @@ def run_solve(args):
             role = "the answer" if index == len(answers) - 1 else "first answer, confirmed below"
             print(f"{name} ({role}):")
             print(answer.table())
-            print(f"   that solve took {answer.seconds:.3g} s (first call: tracing and compiling included)\n")
+            print(f"   that solve took {answer.seconds:.3g} s (first call: tracing, and compiling or loading from the cache, included)\n")
         if exact is not None:
             print(_difference(answers[0][2], result, answers[0][0], levels))
         if warm is not None:
@@ -476,7 +496,7 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
-    use_compilation_cache()
+    use_compilation_cache(getattr(args, "debug", False))
     warnings.showwarning = _show_warning
     command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy, "show": run_show,
                "sweep": run_sweep, "tolerance": run_tolerance}[args.command]

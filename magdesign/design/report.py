@@ -82,7 +82,8 @@ class DesignResult(eqx.Module):
         derivatives: {key: {variable: d parameter / d key}}, key a target's output (d/d its
             value), "output.upper" / "output.lower" for an active limit's bound, or a
             fixed input's name (:class:`Problem` ``fixed``); NaN (null in JSON) where the
-            derivative does not exist or could not be computed.
+            derivative does not exist (every one, unless the status is "successful") or
+            could not be computed.
         violated: names of the targets and limits not met.
         outputs: the model outputs named by the problem (targets, limits, objective, report).
         steps: solver steps, all phases; seconds: wall time of the solve.

@@ -1050,9 +1050,6 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     y = jnp.where(kept, jnp.clip(y, 0.0, y_max), y_start)
     outputs = jnp.where(kept, outputs, search.jet.outputs)
     c = jnp.where(kept, c, search.jet.v[1:])
-    # Where the polish was not kept, or its implicit solve failed, there are no
-    # derivatives: NaN (null in JSON), never a plain 0 that reads as "insensitive".
-    derivatives = jnp.where(kept & jnp.isfinite(dy), scale[:, None] * dy, jnp.nan)
 
     # Stationarity is a gradient condition: met to sqrt(rtol), as the optimum's value is.
     kkt_met = kept & (residual <= jnp.sqrt(tol)) & (search.phase == CONVERGED)
@@ -1072,6 +1069,11 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
         ]
     ):
         status = DesignStatus.where(failed, item, status)
+    # Derivatives of the optimum exist only at one: NaN (null in JSON) where the status is not
+    # successful (a point that breaks a target or a limit, a saddle, a search cut short), where
+    # the polish was not kept or its implicit solve failed; never a plain 0 that reads as
+    # "insensitive", nor a number that reads as the sensitivity of a design that is not one.
+    derivatives = jnp.where((status == DesignStatus.successful) & kept & jnp.isfinite(dy), scale[:, None] * dy, jnp.nan)
     m = len(problem.targets) + len(problem.limit_rows)  # without _evaluate's row that never binds
     return CoreSolution(
         x=lower + scale * y,
@@ -1266,8 +1268,9 @@ def solve(
         "not_a_minimum" or "max_steps_reached"), parameters, achieved
         targets and limits, active bounds and limits, steps, seconds, and the implicit
         derivatives of the parameters with respect to the target values and active limit
-        bounds (NaN where they do not exist or could not be computed: an optimum that
-        the polish did not refine, or a model whose derivative there is infinite).
+        bounds (NaN where they do not exist or could not be computed: a status other
+        than "successful", an optimum that the polish did not refine, or a model whose
+        derivative there is infinite).
     """
     settings, host = settings_of(rtol, atol, max_steps), _host(problem)
     y0, theta = (host.y0 if not start else _start(problem, start, host.arrays)), host.theta

@@ -374,6 +374,24 @@ def test_unreachable_target_says_so():
     assert result.parameters["x"] == pytest.approx(2.0)
 
 
+def test_a_point_that_breaks_a_target_has_no_derivatives():
+    """min x with x^2 + 1 = 1/2: no point meets the target, and the result, "infeasible_target"
+    at x = 0 (least violation), reports no derivatives of an optimum there is not (NaN); the
+    polished point's implicit derivative used to come out as a plain number (-3.9e-21).
+    The same target at 2 is met, and its derivative is the closed form -1 / (2 sqrt(1))."""
+    def problem(value):
+        return Problem(lambda v: {"q": v["x"] ** 2 + 1.0, "f": v["x"]}, [Variable("x", -2.0, 2.0)],
+                       targets=[Target("q", value, scale=1.0)], objective=Objective("f", "min"))
+
+    broken = solve(problem(0.5))
+    assert broken.status == "infeasible_target"
+    assert math.isnan(broken.derivatives["q"]["x"])
+    met = solve(problem(2.0))
+    assert met.status == "successful"
+    assert met.parameters["x"] == pytest.approx(-1.0, abs=1e-9)
+    assert met.derivatives["q"]["x"] == pytest.approx(-0.5, rel=1e-9)
+
+
 def test_nonlinear_equations_from_a_far_start():
     """Targets only, two equations in two unknowns with one root: 10 (y - x^2) = 0 and
     1 - x = 0 (Rosenbrock's), from (-1.2, 1): solved at (1, 1)."""
