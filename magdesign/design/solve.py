@@ -286,9 +286,20 @@ def _violation(c, n_targets):
     return jnp.sum(jnp.maximum(targets - _MET_ROW, 0.0)) + jnp.sum(jnp.maximum(limits - _MET_ROW, 0.0))
 
 
+def _merit_parts(jet, weight, n_targets):
+    """(2,) the weighted objective and the l1 violation at a jet: the merit's two terms,
+    which the line search's history keeps apart, to price them at a later penalty."""
+    return jnp.stack([weight * jet.v[0], _violation(jet.v[1:], n_targets)])
+
+
 def _merit(jet, weight, nu, n_targets):
     """The exact l1 merit function weight f + nu |violation|_1 at a jet."""
-    return weight * jet.v[0] + nu * _violation(jet.v[1:], n_targets)
+    return _priced(_merit_parts(jet, weight, n_targets), nu)
+
+
+def _priced(parts, nu):
+    """The merit of (..., 2) parts (:func:`_merit_parts`) at penalty nu."""
+    return parts[..., 0] + nu * parts[..., 1]
 
 
 class _Step(eqx.Module):
@@ -658,7 +669,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
                 # a larger penalty would make the old points' merits lenient; a search restarts
                 # its history then, and after an escape or a probe
                 jnp.where((nu > state.nu) | ~searched, _NO_POINT, jnp.roll(state.history, 1, axis=0)).at[0].set(
-                    jnp.stack([state.weight * jet.v[0], _violation(jet.v[1:], n_targets)])
+                    _merit_parts(jet, state.weight, n_targets)
                 ),
                 searched & state.bent,
                 jnp.where(probe, u, 0.0),
@@ -710,7 +721,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         merit = _merit(jet, state.weight, state.nu, n_targets)
         # nonmonotone only in the search and along a descent direction (the history's
         # first entry is this point's merit)
-        merits = state.history @ jnp.stack([1.0, state.nu])
+        merits = _priced(state.history, state.nu)
         reference = jnp.where((state.phase == SEARCH) & (state.slope < 0.0), jnp.max(merits), state.merit)
         wanted = reference + _ARMIJO * (alpha * state.slope + alpha**2 * state.curvature)
         wanted = jnp.where(probing, state.merit - _ROUNDING * (1.0 + jnp.abs(state.merit)), wanted)
