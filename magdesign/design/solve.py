@@ -493,10 +493,27 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_ta
     return eigenvalues[0] / size, v, w, u, wu
 
 
+def _room_along(slack, rate):
+    """The largest a in [0, 1] with slack - a rate >= 0 in every row that the direction
+    raises (rate > 0); a row without slack (<= 0) leaves no room along it."""
+    ratios = jnp.where(rate > 0, jnp.maximum(slack, 0.0) / jnp.where(rate > 0, rate, 1.0), jnp.inf)
+    return jnp.clip(jnp.min(ratios, initial=jnp.inf), 0.0, 1.0)
+
+
 def _room(y, v, y_max):
     """The largest a in [0, 1] with y + a v inside the box."""
-    ratios = jnp.where(v > 0, (y_max - y) / jnp.where(v > 0, v, 1.0), jnp.where(v < 0, -y / jnp.where(v < 0, v, 1.0), jnp.inf))
-    return jnp.clip(jnp.min(ratios), 0.0, 1.0)
+    return _room_along(jnp.concatenate([y_max - y, y]), jnp.concatenate([v, -v]))
+
+
+def _limits_room(jet, v, n_targets):
+    """The largest a in [0, 1] with the limit rows (<= 0 when met), linearised at the jet, met
+    at a v. A row whose rate along v is below DESIGN_NULL_SPACE_RTOL of its gradient's norm
+    (times v's) counts as not raised: v lies in the null space of the strongly active rows,
+    up to rounding, which must not choose a side."""
+    gradients = jet.J[1 + n_targets :]
+    rate = gradients @ v
+    level = DESIGN_NULL_SPACE_RTOL * jnp.linalg.norm(gradients, axis=1) * jnp.linalg.norm(v)
+    return _room_along(-jet.v[1 + n_targets :], jnp.where(rate > level, rate, 0.0))
 
 
 # Phases of the search. Each iteration tries one point and evaluates the model's jet there
@@ -630,9 +647,15 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             (jet, step, bound_multipliers, state.weight, approach),
             (jnp.ones(()), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n)),
         )
-        # Leave a saddle downhill (or, where flat, towards the side with more room).
+        # Leave a saddle downhill, or, where flat, towards the side with more room in the box
+        # and the limits, then in the box alone. At (0, 1), a vertex of min -(x^2 + 2 y^2) on
+        # x + y <= 1, y <= 1, whose limit holds with no multiplier, the box's room alone chose
+        # +x, across the limit; every escape failed and the point was called "not_a_minimum".
         v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
-        v = jnp.where((jnp.dot(gradient, v) == 0.0) & (_room(y, -v, y_max) > _room(y, v, y_max)), -v, v)
+        box = jnp.stack([_room(y, v, y_max), _room(y, -v, y_max)])
+        held = jnp.minimum(box, jnp.stack([_limits_room(jet, v, n_targets), _limits_room(jet, -v, n_targets)]))
+        wider = (held[1] > held[0]) | ((held[1] == held[0]) & (box[1] > box[0]))
+        v = jnp.where((jnp.dot(gradient, v) == 0.0) & wider, -v, v)
         room = _room(y, v, y_max)
         saddle = stationary & (curvature < -DESIGN_CURVATURE_TOL)
         escape = saddle & (state.escapes < DESIGN_ESCAPES) & (room > 0.0)

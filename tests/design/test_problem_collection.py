@@ -130,6 +130,22 @@ def test_a_saddle_is_left_uphill_for_a_maximum():
     assert set(result.active_bounds) == {"x"}
 
 
+@pytest.mark.parametrize("start", [(0.25, 0.794), (0.009, 0.107), (0.991, 0.585), (0.244, 0.978), (0.0, 1.0)])
+def test_a_saddle_vertex_is_left_on_the_side_its_limit_allows(start):
+    """min -(x^2 + 2 y^2) on [-1, 1]^2 with x + y <= 1: from these starts the steps reach the
+    vertex (0, 1), where y's bound holds with multiplier 4 and the limit with none; the
+    objective falls along -x (f = -2 - x^2) and the limit forbids +x. The escape went +x
+    (the box has as much room there), each failed, and the result was "not_a_minimum".
+    The minima are the vertices (-1, -1), (1, -1) and (-1, 1), f = -3."""
+    problem = Problem(lambda v: {"f": -(v["x"] ** 2 + 2.0 * v["y"] ** 2), "s": v["x"] + v["y"]},
+                      [Variable("x", -1.0, 1.0), Variable("y", -1.0, 1.0)],
+                      limits=[Limit("s", upper=1.0)], objective=Objective("f", "min"))
+    result = solve(problem, start={"x": start[0], "y": start[1]})
+    assert result.status == "successful"
+    assert result.outputs["f"] == pytest.approx(-3.0, rel=1e-12)
+    assert (result.parameters["x"], result.parameters["y"]) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0)]
+
+
 def cube(v):
     return {"f": v["x"] ** 3}
 
