@@ -631,7 +631,8 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         # degenerate minimum, and its probe took an infeasible point.
         need = jnp.maximum(2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0), _PENALTY_FLOOR)
         nu = jnp.maximum(need, 0.5 * (state.nu + need))
-        merit = _merit(jet, state.weight, nu, n_targets)
+        parts = _merit_parts(jet, state.weight, n_targets)
+        merit = _priced(parts, nu)
         gradient = state.weight * jet.J[0]
         # The merit's directional derivative along the step; never above 0, so that a
         # step which is no descent direction (an inexact subproblem) is taken only downhill.
@@ -655,8 +656,8 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         box = jnp.stack([_room(y, v, y_max), _room(y, -v, y_max)])
         held = jnp.minimum(box, jnp.stack([_limits_room(jet, v, n_targets), _limits_room(jet, -v, n_targets)]))
         wider = (held[1] > held[0]) | ((held[1] == held[0]) & (box[1] > box[0]))
-        v = jnp.where((jnp.dot(gradient, v) == 0.0) & wider, -v, v)
-        room = _room(y, v, y_max)
+        flip = (jnp.dot(gradient, v) == 0.0) & wider
+        v, room = jnp.where(flip, -v, v), jnp.where(flip, box[1], box[0])
         saddle = stationary & (curvature < -DESIGN_CURVATURE_TOL)
         escape = saddle & (state.escapes < DESIGN_ESCAPES) & (room > 0.0)
         # A stationary point whose curvature is too small to tell a minimum (x^3 at 0, a
@@ -691,9 +692,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
                 radius,
                 # a larger penalty would make the old points' merits lenient; a search restarts
                 # its history then, and after an escape or a probe
-                jnp.where((nu > state.nu) | ~searched, _NO_POINT, jnp.roll(state.history, 1, axis=0)).at[0].set(
-                    _merit_parts(jet, state.weight, n_targets)
-                ),
+                jnp.where((nu > state.nu) | ~searched, _NO_POINT, jnp.roll(state.history, 1, axis=0)).at[0].set(parts),
                 searched & state.bent,
                 jnp.where(probe, u, 0.0),
                 jnp.where(probe, wu, 0.0),
