@@ -99,7 +99,7 @@ DESIGN_ELASTIC = 1e6
 # - the smallest eigenvalue of the QP's Hessian, relative to its largest (plus 1): the
 #   Hessian of the Lagrangian with its eigenvalues' moduli, made definite by this floor
 #   (which bounds a step where the model is flat to 1e4 box widths, so the QP's own
-#   1e-12 residuals move it by 1e-8 at most);
+#   1e-12 residuals move it by 1e-8 at most; not where the targets fix the step);
 DESIGN_HESSIAN_FLOOR = 1e-4
 #   a curvature of either sign whose modulus is above DESIGN_KEPT_CURVATURE (relative, as
 #   that floor) keeps its modulus: raised to the floor, a degenerate minimum's vanishing
@@ -134,7 +134,8 @@ DESIGN_GRADIENT_FLOOR = 1e-6
 DESIGN_NULL_SPACE_RTOL = 1e-9
 # - the polish (a Newton root find on the KKT or feasibility equations) refines the
 #   search's point; a root further than this (scaled variables, box width 1) from it is
-#   another solution of the equations, and the search's point stands.
+#   another solution of the equations, or the far end of Newton's slow steps from a flat
+#   minimum (x^6's), and the search's point stands, judged by its own stationarity.
 DESIGN_POLISH_REACH = 1e-4
 
 

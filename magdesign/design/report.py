@@ -14,7 +14,8 @@ class DesignStatus(eqx.Enumeration):
     """The design solver's outcomes. The solver gives the first that applies, in the order
     nonfinite, mechanics_not_converged, max_steps_reached (a search cut short), then
     infeasible_target, limit_violated, not_a_minimum, max_steps_reached (a search that
-    ended but whose polish did not converge), successful."""
+    ended at a point not stationary to the tolerance: the polish's, or the search's own
+    where the polish went further than it may move), successful."""
 
     successful = "every target met, every limit held, a local optimum to first and second order"
     nonfinite = "the model gave NaN or inf at the start or at the end"

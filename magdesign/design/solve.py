@@ -337,8 +337,10 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
     DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits), |d_i| <= radius.
     The quadratic term is the Hessian of the Lagrangian with its eigenvalues' moduli,
     those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except one above
-    DESIGN_KEPT_CURVATURE, which stays (see there). Without an objective it is
-    |d|^2 / 2 (the minimum-norm step of Gauss-Newton)."""
+    DESIGN_KEPT_CURVATURE, which stays (see there), and less the floor again on the
+    flat directions' part that the targets' gradients span, where the targets'
+    linearisation fixes the step. Without an objective it is |d|^2 / 2 (the minimum-norm
+    step of Gauss-Newton)."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     m = c.shape[0]
@@ -348,12 +350,26 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
     if has_objective:
         size = 1.0 + jnp.max(moduli)
         kept = moduli >= DESIGN_KEPT_CURVATURE * size
-        moduli = jnp.maximum(moduli, jnp.where(kept, 0.0, DESIGN_HESSIAN_FLOOR * size))
+        floor = DESIGN_HESSIAN_FLOOR * size
+        moduli = jnp.maximum(moduli, jnp.where(kept, 0.0, floor))
     else:
         moduli = jnp.maximum(moduli, 1.0)
+    hessian = (vectors * moduli) @ vectors.T
+    if has_objective and n_targets:
+        # The floor bounds steps along flat directions; along those that the targets'
+        # linearisation fixes it only slows the step: x^4 on x + y = 1, where y is flat, got
+        # the floor's curvature along the target's line and crawled (steps of 1/130 of
+        # Newton's, "max_steps_reached" 4e-4 from the minimum). Off: the part of the flat
+        # directions in the span of the targets' gradients projected onto them (regularised,
+        # so that a gradient barely in that span removes barely any floor).
+        flat = vectors * ~kept
+        spread = flat @ (flat.T @ J_c[:n_targets].T)  # (n, targets)
+        gram = spread.T @ spread
+        gram = gram + DESIGN_NULL_SPACE_RTOL * (1.0 + jnp.trace(gram)) * jnp.eye(n_targets)
+        hessian = hessian - floor * spread @ jnp.linalg.solve(gram, spread.T)
     n_slack = 2 * n_targets + n_limits
     nw = n + n_slack
-    Q = jnp.zeros((nw, nw)).at[:n, :n].set((vectors * moduli) @ vectors.T)
+    Q = jnp.zeros((nw, nw)).at[:n, :n].set(hessian)
     q = jnp.concatenate([weight * jet.J[0], jnp.full(n_slack, DESIGN_ELASTIC)])
     eye_t, eye_l = jnp.eye(n_targets), jnp.eye(n_limits)
     A = jnp.concatenate([J_c[:n_targets], -eye_t, eye_t, jnp.zeros((n_targets, n_limits))], axis=1)
@@ -1084,8 +1100,12 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     outputs = jnp.where(kept, outputs, search.jet.outputs)
     c = jnp.where(kept, c, search.jet.v[1:])
 
-    # Stationarity is a gradient condition: met to sqrt(rtol), as the optimum's value is.
-    kkt_met = kept & (residual <= jnp.sqrt(tol)) & (search.phase == CONVERGED)
+    # Stationarity is a gradient condition: met to sqrt(rtol), as the optimum's value is;
+    # where the polish is not kept, at the search's point, which then stands (Newton from a
+    # degenerate minimum, x^6's, goes further than the polish may reach).
+    at_search = equations.rows(equations.unknowns(y_start, multipliers_start), search.jet)
+    residual = jnp.where(kept, residual, jnp.max(jnp.abs(at_search), initial=0.0))
+    kkt_met = (residual <= jnp.sqrt(tol)) & (search.phase == CONVERGED)
     finite = jnp.all(jnp.isfinite(outputs)) & jnp.all(jnp.isfinite(y)) & (search.phase != NONFINITE_START)
     inner_failed = outputs[problem.outputs.index(problem.converged)] < 0.5 if problem.converged is not None else False
     status = DesignStatus.successful
