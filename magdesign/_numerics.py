@@ -130,7 +130,9 @@ DESIGN_FLAT_CURVATURE = 1e-6
 DESIGN_GRADIENT_FLOOR = 1e-6
 # - the active constraints' null space: directions whose singular value is below this,
 #   relative to the largest, are free (the rows are O(1) gradients, so 1e-9 separates a
-#   dependent row from rounding by several decades either way);
+#   dependent row from rounding by several decades either way); also the regulariser,
+#   relative to their squared sizes (plus 1), of the targets' gradients on the flat
+#   directions of the QP's Hessian, whose floor is taken off along them;
 DESIGN_NULL_SPACE_RTOL = 1e-9
 # - the polish (a Newton root find on the KKT or feasibility equations) refines the
 #   search's point; a root further than this (scaled variables, box width 1) from it is

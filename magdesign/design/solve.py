@@ -337,8 +337,8 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
     DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits), |d_i| <= radius.
     The quadratic term is the Hessian of the Lagrangian with its eigenvalues' moduli,
     those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except one above
-    DESIGN_KEPT_CURVATURE, which stays (see there), and less the floor again on the
-    flat directions' part that the targets' gradients span, where the targets'
+    DESIGN_KEPT_CURVATURE, which stays (see there), and less the floor again along the
+    targets' gradients projected onto the flat directions, where the targets'
     linearisation fixes the step. Without an objective it is |d|^2 / 2 (the minimum-norm
     step of Gauss-Newton)."""
     n = y.shape[0]
@@ -359,9 +359,12 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
         # The floor bounds steps along flat directions; along those that the targets'
         # linearisation fixes it only slows the step: x^4 on x + y = 1, where y is flat, got
         # the floor's curvature along the target's line and crawled (steps of 1/130 of
-        # Newton's, "max_steps_reached" 4e-4 from the minimum). Off: the part of the flat
-        # directions in the span of the targets' gradients projected onto them (regularised,
-        # so that a gradient barely in that span removes barely any floor).
+        # Newton's, "max_steps_reached" 4e-4 from the minimum). Off: on the span of the
+        # targets' gradients projected onto the flat directions (regularised by
+        # DESIGN_NULL_SPACE_RTOL of their squared sizes, so that a gradient barely in the
+        # flat directions removes barely any floor). Limits are left out: which hold is
+        # known only after the QP (with the last step's active ones, hs106's polish ended
+        # 1.9e-10 outside a limit).
         flat = vectors * ~kept
         spread = flat @ (flat.T @ J_c[:n_targets].T)  # (n, targets)
         gram = spread.T @ spread
@@ -1077,9 +1080,11 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
 
     loop = _search_and_polish(problem, jax.lax.stop_gradient(y0), theta, settings, y_max)
     search, polish = loop.search, loop.polish
-    y_start, multipliers_start = search.y, search.step.multipliers
     # the polish's answer is the last point where it evaluated the model, with its jet
     equations, z, polished = _equations(problem, search, y_max), polish.evaluated, polish.jet
+    # the search's point and its multipliers, of the rows held there (the others' are the
+    # QP's leftovers, below its activity threshold)
+    y_start, multipliers_start = search.y, jnp.where(equations.equations, search.step.multipliers, 0.0)
     active = equations.active
     residual = jnp.max(jnp.abs(polish.newton.f), initial=0.0)
     y = z[:n]
@@ -1090,11 +1095,15 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     outputs, c = polished.outputs, polished.v[1:]
     # The polish refines the search's point; one that ends outside the box or far away
     # found another solution of the equations, and the search's point stands, as it does
-    # where the model is not finite at the polish's point.
+    # where the model is not finite at the polish's point, and where the polish breaks a
+    # row that the search's point meets (in an experiment with another QP Hessian, Newton's
+    # residual on the badly scaled hs106 stalled 1.9e-10 outside a limit that the search's
+    # point held to 6e-16: "limit_violated").
     kept = (
         usable
         & jnp.all((y >= -DESIGN_ON_CONSTRAINT) & (y <= y_max + DESIGN_ON_CONSTRAINT))
         & (jnp.max(jnp.abs(y - y_start)) <= DESIGN_POLISH_REACH)
+        & (~jnp.any(_broken(c, n_targets, tol)) | jnp.any(_broken(search.jet.v[1:], n_targets, tol)))
     )
     y = jnp.where(kept, jnp.clip(y, 0.0, y_max), y_start)
     outputs = jnp.where(kept, outputs, search.jet.outputs)
@@ -1106,6 +1115,7 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     at_search = equations.rows(equations.unknowns(y_start, multipliers_start), search.jet)
     residual = jnp.where(kept, residual, jnp.max(jnp.abs(at_search), initial=0.0))
     kkt_met = (residual <= jnp.sqrt(tol)) & (search.phase == CONVERGED)
+    targets_broken, limits_broken = _broken(c, n_targets, tol)
     finite = jnp.all(jnp.isfinite(outputs)) & jnp.all(jnp.isfinite(y)) & (search.phase != NONFINITE_START)
     inner_failed = outputs[problem.outputs.index(problem.converged)] < 0.5 if problem.converged is not None else False
     status = DesignStatus.successful
@@ -1115,8 +1125,8 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
             (inner_failed, DesignStatus.mechanics_not_converged),
             # A search cut short by max_steps says so, not that a target is out of reach.
             (search.phase < CONVERGED, DesignStatus.max_steps_reached),
-            (jnp.any(jnp.abs(c[:n_targets]) > tol), DesignStatus.infeasible_target),
-            (jnp.any(c[n_targets:] > tol), DesignStatus.limit_violated),
+            (targets_broken, DesignStatus.infeasible_target),
+            (limits_broken, DesignStatus.limit_violated),
             (search.phase == NOT_MINIMUM, DesignStatus.not_a_minimum),
             (~kkt_met, DesignStatus.max_steps_reached),
         ]
@@ -1142,6 +1152,11 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
         status=status._value,
         steps=search.steps,
     )
+
+
+def _broken(c, n_targets, tol):
+    """(2,) bool: a target broken, a limit broken, in the scaled rows c (beyond ``tol``)."""
+    return jnp.stack([jnp.any(jnp.abs(c[:n_targets]) > tol), jnp.any(c[n_targets:] > tol)])
 
 
 def _packed(problem, y0, theta, settings):

@@ -205,11 +205,10 @@ def test_a_degenerate_minimum_is_found(name):
         assert result.parameters[k] == pytest.approx(value, abs=1e-6), k
 
 
-
 def test_a_degenerate_minimum_on_a_target_is_found():
     """min x^4 on the target x + y = 1, [-2, 2]^2, from (1, 0.5): the minimum is (0, 1) (x^4
     >= 0, and y = 1 - x). y is flat, and the QP's Hessian floor on it became curvature along
-    the target's line, where x^4's own vanishes: the steps crawled, 1/130 of Newton's,
+    the target's line, where x^4's own vanishes: the steps crawled at 1/130 of Newton's,
     "max_steps_reached" 4e-4 from the minimum after 100 evaluations."""
     problem = Problem(lambda v: {"f": v["x"] ** 4, "s": v["x"] + v["y"]},
                       [Variable("x", -2.0, 2.0, start=1.0), Variable("y", -2.0, 2.0, start=0.5)],
@@ -225,13 +224,12 @@ def test_a_minimum_too_flat_for_the_polish_stands_at_the_searchs_point():
     tolerance (x ~ 5e-3, f ~ 1e-14 of its value at the start), and Newton's steps from there
     (each 4/5 of the last) go further than the polish may move, so the search's point
     stands. It was "max_steps_reached" after 33 of 100 evaluations; its stationarity is met,
-    so it is a minimum to tolerance, without derivatives (none are asked here)."""
+    so it is a minimum to tolerance (its derivatives would be NaN; there are none here)."""
     problem = Problem(lambda v: {"f": v["x"] ** 6}, [Variable("x", -2.0, 2.0, start=1.0)],
                       objective=Objective("f", "min"))
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
     assert abs(result.parameters["x"]) < 1e-2
-    assert result.steps < 100
 
 
 HS055_FROM_ITS_OTHER_MINIMUM = Published(
