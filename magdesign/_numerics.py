@@ -110,7 +110,8 @@ DESIGN_HESSIAN_FLOOR = 1e-4
 #   no curvature to stop it;
 DESIGN_KEPT_CURVATURE = 1e-8
 # - a limit row or bound is active where its QP multiplier exceeds this (with an
-#   objective), or where the step ends within DESIGN_ON_CONSTRAINT of it (without one);
+#   objective; also where the step ends on it to rounding, weakly active), or where the
+#   step ends within DESIGN_ON_CONSTRAINT of it (without one);
 DESIGN_ACTIVE_MULTIPLIER = 1e-8
 DESIGN_ON_CONSTRAINT = 1e-9
 # - negative curvature of the Lagrangian on the active constraints' null space below

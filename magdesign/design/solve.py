@@ -6,7 +6,8 @@ stationary point, to a gradient of DESIGN_GRADIENT_FLOOR times its Hessian) and 
 to its target or limit. It has two stages:
 
 1. sequential quadratic programming (ours): at each accepted point the quadratic model
-   (the Hessian of the Lagrangian, made definite by taking its eigenvalues' moduli) is
+   (the Hessian of the Lagrangian at the least-norm multipliers of the last step's active
+   rows, made definite by taking its eigenvalues' moduli) is
    minimised subject to the linearised targets and limits, the box and a radius (an
    inf-norm trust region: none until the line search first shortens a step, then the
    length it shortened the last one to, doubled after each whole step that reaches
@@ -133,6 +134,12 @@ _ROUNDING = 1e-13
 # Scaled constraint rows within this of their target or limit count as met in the merit
 # function: far below the tolerance on them (DESIGN_RTOL), above their rounding.
 _MET_ROW = 1e-13
+# The step ends on a limit or bound (with an objective: weakly active) within this, its
+# rounding: a limit 1e-13 of a box width inside a bound, taken for both, was held on both.
+_ROUNDED = 1e-15
+# A row's QP multiplier within this (relative) of DESIGN_ELASTIC is the elastic price: the
+# row's slack is in use.
+_ELASTIC_ROUNDING = 1e-6
 
 
 class Settings(eqx.Module):
@@ -388,17 +395,47 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
     return Q, q, A, -c[:n_targets], G, h
 
 
-def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective, radius):
+def _hessian_multipliers(jet, last: _Step, bound_multipliers):
+    """(m,) the multipliers that weight the rows' Hessians in the next subproblem: the
+    ``last`` step's, those of its active rows replaced by the least-norm ones that give
+    the same combination of gradients, with the bounds' (``bound_multipliers`` (2n,):
+    lower, then upper; the radius's, where it limits the step). A row priced at the
+    elastic cost keeps its multiplier: the linearisation cannot meet it, and its
+    multiplier is the price of its violation, not a share of a combination (min x with
+    x^2 + 1 = 1/2, projected with the radius's multiplier, got a Hessian 1e-9 of the
+    elastic one, and steps to and fro across the point of least violation). Where active
+    rows are dependent, the QP's multipliers lie anywhere in an unbounded set, and its
+    interior-point method ends half way to the elastic price: at hs108's x9 = 0, where x3 x9 >= 0, -x5 x9 >= 0 and x9 >= 0 all have gradients along
+    x9, two multipliers of 4e5 and 6e5 whose Hessians' cross terms, made definite, gave x3
+    and x5 curvatures of 1e6; steps of 3e-7 crawled to "max_steps_reached" at a point far
+    from stationary."""
+    n = jet.J.shape[1]
+    n_targets = last.multipliers.shape[0] - last.active_limits.shape[0]
+    rows = jnp.concatenate([jnp.ones(n_targets, bool), last.active_limits])
+    rows = rows & (jnp.abs(last.multipliers) < (1.0 - _ELASTIC_ROUNDING) * DESIGN_ELASTIC)
+    lower, upper = jnp.split(bound_multipliers, 2)
+    fixed = (jnp.maximum(lower, upper) > DESIGN_ACTIVE_MULTIPLIER) | last.at_lower | last.at_upper
+    matrix = _active_matrix(jet, rows, fixed)  # (m + n, n)
+    weights = jnp.concatenate([jnp.where(rows, last.multipliers, 0.0), jnp.where(fixed, upper - lower, 0.0)])
+    combined = matrix.T @ weights
+    least = jnp.linalg.pinv(matrix.T, rtol=DESIGN_NULL_SPACE_RTOL) @ combined
+    return jnp.where(rows, least[: last.multipliers.shape[0]], last.multipliers)
+
+
+def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_objective, radius):
     """The :func:`subproblem`'s solution at y, its QP's rows active at the ``last`` step
-    taken as a guess. With an objective the active set is the rows and bounds with a
-    positive multiplier (a bound only where it, not the ``radius``, limits the step);
-    without one the multipliers say nothing, and it is the rows and bounds that the step
-    ends on. Returns the :class:`_Step` and the bounds' multipliers (2n,): lower, then
-    upper."""
+    taken as a guess; the ``last`` step's multipliers, with its ``bound_multipliers``
+    (2n,), weight the rows' Hessians (:func:`_hessian_multipliers`). The active set is
+    the rows and bounds that the step ends on (within DESIGN_ON_CONSTRAINT without an
+    objective, whose multipliers say nothing; with one, to rounding) and those with a
+    positive multiplier (a bound only where it, not the ``radius``, limits the step).
+    Returns the :class:`_Step` and the bounds' multipliers (2n,): lower, then upper (0
+    where below the bound's slack)."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     n_limits = c.shape[0] - n_targets
-    Q, q, A, b, G, h = subproblem(jet, y, y_max, last.multipliers, weight, n_targets, has_objective, radius)
+    multipliers = _hessian_multipliers(jet, last, bound_multipliers) if has_objective else last.multipliers
+    Q, q, A, b, G, h = subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius)
     qp = solve_qp(Q, q, A, b, G, h, guess=last.qp_rows, box=subproblem_box(n, n_targets, n_limits))
     # A subproblem that failed (non-finite) offers no step; the polish then judges the point.
     qp = jax.tree.map(lambda a: jnp.where(jnp.isfinite(a), a, 0.0) if a.dtype == jnp.float64 else a, qp)
@@ -408,6 +445,8 @@ def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective, radius):
         jnp.split(rows[: n_limits + 2 * n], [n_limits, n_limits + n]) for rows in (qp.z, h - G @ qp.w)
     )
     linearised = c + J_c @ d
+    # the limits and bounds that the step ends on, within ``near``
+    ends_on = lambda near: (linearised[n_targets:] >= -near, y + d <= near, y + d >= y_max - near)  # noqa: E731
     if has_objective:
         # An inactive row's multiplier is the interior-point method's residual over the row's
         # slack, so a row counts as active only where its multiplier exceeds its slack too:
@@ -418,10 +457,22 @@ def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective, radius):
         active_limits, at_lower, at_upper = (
             multiplier > jnp.maximum(DESIGN_ACTIVE_MULTIPLIER, slack) for multiplier, slack in active
         )
+        # (a bound's multiplier below its slack is no multiplier; where the radius, not the
+        # bound, limits the step it is the radius's, kept for the Hessian's multipliers)
+        lower_multipliers, upper_multipliers = jnp.where(at_lower, lower_multipliers, 0.0), jnp.where(
+            at_upper, upper_multipliers, 0.0
+        )
         at_lower, at_upper = at_lower & (y <= radius), at_upper & (y_max - y <= radius)
+        # Those the step ends on to rounding are active too, with no multiplier (weakly): at
+        # hs108's optimum x9 >= 0, x3 x9 >= 0 and -x5 x9 >= 0 hold so, and without them it
+        # ended "limit_violated" (the polish, holding the rows with a multiplier, moved along
+        # the optimum's manifold to x9 < 0). Within DESIGN_ON_CONSTRAINT, a limit 1e-10 below
+        # a bound brought the bound in too, and the polish split the two.
+        weakly = ends_on(_ROUNDED)
+        held = (active_limits, at_lower, at_upper)
+        active_limits, at_lower, at_upper = (strong | weak for strong, weak in zip(held, weakly))
     else:
-        active_limits = linearised[n_targets:] >= -DESIGN_ON_CONSTRAINT
-        at_lower, at_upper = y + d <= DESIGN_ON_CONSTRAINT, y + d >= y_max - DESIGN_ON_CONSTRAINT
+        active_limits, at_lower, at_upper = ends_on(DESIGN_ON_CONSTRAINT)
     return _Step(
         d=d,
         multipliers=jnp.concatenate([qp.y, limit_multipliers]),
@@ -433,9 +484,10 @@ def _step(jet, y, y_max, last: _Step, weight, n_targets, has_objective, radius):
     ), jnp.concatenate([lower_multipliers, upper_multipliers])
 
 
-def _settled_step(jet, y, y_max, last: _Step, weight, n_targets, radius, xtol):
+def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, radius, xtol):
     """:func:`_step` (with an objective), solved once more where its step is shorter than
-    ``xtol``, now with the Hessian of the Lagrangian at its own multipliers. The first
+    ``xtol``, now with the Hessian of the Lagrangian at its own multipliers (as
+    :func:`_hessian_multipliers` makes them). The first
     solve's Hessian takes the ``last`` point's multipliers, which after an infeasible
     (elastic) subproblem are priced at DESIGN_ELASTIC and then fall by orders of magnitude
     a step; a Hessian that large makes a step short at a point that is not stationary
@@ -444,14 +496,14 @@ def _settled_step(jet, y, y_max, last: _Step, weight, n_targets, radius, xtol):
     program stays the size it was."""
 
     def solve(carry):
-        last, _, trips = carry
-        return (*_step(jet, y, y_max, last, weight, n_targets, True, radius), trips + 1)
+        last, bound_multipliers, trips = carry
+        return (*_step(jet, y, y_max, last, bound_multipliers, weight, n_targets, True, radius), trips + 1)
 
     def again(carry):
         step, _, trips = carry
         return (trips == 0) | ((trips == 1) & (jnp.max(jnp.abs(step.d)) <= xtol))
 
-    step, bound_multipliers, _ = jax.lax.while_loop(again, solve, (last, jnp.zeros(2 * y.shape[0]), jnp.asarray(0)))
+    step, bound_multipliers, _ = jax.lax.while_loop(again, solve, (last, bound_multipliers, jnp.asarray(0)))
     return step, bound_multipliers
 
 
@@ -637,9 +689,13 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             radius = jnp.where(overshot, 0.5 * state.alpha * taken, radius)
         radius = jnp.maximum(jnp.where(reached, _RADIUS_GROWTH * state.radius, radius), _RADIUS_FLOOR * xtol)
         if problem.objective is not None:
-            step, bound_multipliers = _settled_step(jet, y, y_max, state.step, state.weight, n_targets, radius, xtol)
+            step, bound_multipliers = _settled_step(
+                jet, y, y_max, state.step, state.bound_multipliers, state.weight, n_targets, radius, xtol
+            )
         else:  # the Hessians are not used (see _jet): one solve
-            step, bound_multipliers = _step(jet, y, y_max, state.step, state.weight, n_targets, False, radius)
+            step, bound_multipliers = _step(
+                jet, y, y_max, state.step, state.bound_multipliers, state.weight, n_targets, False, radius
+            )
         # The penalty stays at least max(twice the multipliers, _PENALTY_FLOOR) and falls
         # halfway towards that at each point (Powell's update, with one penalty for all
         # rows, where SLSQP keeps one per row, and a floor): after an elastic step

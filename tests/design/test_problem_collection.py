@@ -14,7 +14,7 @@ import pytest
 
 from magdesign.design import DesignStatus, Limit, Objective, Problem, Target, Variable, solve
 from magdesign.design.report import STATUS_NAMES
-from helpers_problems import HOCK_SCHITTKOWSKI, Published
+from helpers_problems import BOX, HOCK_SCHITTKOWSKI, Published
 
 TOL = 1e-6
 EXAMPLES = Path(__file__).parents[2] / "examples"
@@ -59,17 +59,23 @@ def test_each_published_optimum_is_a_kkt_point(published):
     assert np.max(np.abs(residual)) <= 1e-6 * max(1.0, np.max(np.abs(gradient)))
 
 
+@pytest.mark.parametrize("width", [1.0, 1e3])
 @pytest.mark.parametrize("gap", [1e-1, 1e-3, 3e-5, 1e-7, 1e-10, 0.0])
-def test_a_limit_at_any_distance_from_a_bound(gap):
-    """maximise x with x <= 1 - gap and x in [0, 1]: the limit (or, at gap 0, both) active."""
+def test_a_limit_at_any_distance_from_a_bound(gap, width):
+    """maximise x with x <= width - gap and x in [0, width]: the limit (or, at gap 0, both)
+    active; where the limit lies inside the box, the bound is not held, and x moves with the
+    limit one to one (a limit 1e-13 of the box's width inside it once brought the bound in)."""
     problem = Problem(
-        lambda v: {"x": v["x"]}, [Variable("x", 0.0, 1.0)], limits=[Limit("x", upper=1.0 - gap, scale=1.0)],
+        lambda v: {"x": v["x"]}, [Variable("x", 0.0, width)], limits=[Limit("x", upper=width - gap, scale=1.0)],
         objective=Objective("x", "max"),
     )
     result = solve(problem)
     assert result.status == "successful"
-    assert result.parameters["x"] == pytest.approx(1.0 - gap, rel=0, abs=1e-12)
+    assert result.parameters["x"] == pytest.approx(width - gap, rel=0, abs=1e-12 * width)
     assert result.limits["x"]["active"]
+    if gap > 0.0:
+        assert result.active_bounds == {}
+        assert result.derivatives["x.upper"]["x"] == pytest.approx(1.0, rel=1e-9)
 
 
 def test_a_limit_that_cannot_hold_is_violated_not_active():
@@ -263,6 +269,46 @@ def test_an_inactive_bound_beside_dependent_targets_is_not_held():
     np.testing.assert_allclose(x, HS055_FROM_ITS_OTHER_MINIMUM.optimum, rtol=1e-9, atol=1e-9)
     assert result.outputs["f"] == pytest.approx(20.0 / 3.0, rel=1e-12)
     assert result.active_bounds == {"x1": "upper", "x4": "lower"}
+
+
+HS108 = Published(
+    "hs108",
+    lambda x: -0.5 * (x[0] * x[3] - x[1] * x[2] + x[2] * x[8] - x[4] * x[8] + x[4] * x[7] - x[5] * x[6]),
+    [(-BOX, BOX)] * 8 + [(0.0, BOX)], [1.0] * 9,
+    [0.8841292, 0.4672425, 0.03742076, 0.9992996, 0.8841292, 0.4672425, 0.03742076, 0.9992996, 0.0], -0.8660254038,
+    g=[
+        lambda x: 1.0 - x[2] ** 2 - x[3] ** 2,
+        lambda x: 1.0 - x[8] ** 2,
+        lambda x: 1.0 - x[4] ** 2 - x[5] ** 2,
+        lambda x: 1.0 - x[0] ** 2 - (x[1] - x[8]) ** 2,
+        lambda x: 1.0 - (x[0] - x[4]) ** 2 - (x[1] - x[5]) ** 2,
+        lambda x: 1.0 - (x[0] - x[6]) ** 2 - (x[1] - x[7]) ** 2,
+        lambda x: 1.0 - (x[2] - x[4]) ** 2 - (x[3] - x[5]) ** 2,
+        lambda x: 1.0 - (x[2] - x[6]) ** 2 - (x[3] - x[7]) ** 2,
+        lambda x: 1.0 - x[6] ** 2 - (x[7] - x[8]) ** 2,
+        lambda x: x[0] * x[3] - x[1] * x[2],
+        lambda x: x[2] * x[8],
+        lambda x: -x[4] * x[8],
+        lambda x: x[4] * x[7] - x[5] * x[6],
+    ],
+)
+
+
+def test_dependent_limits_on_a_bound_neither_slow_the_steps_nor_leave_the_polish():
+    """hs108 from its published start (the book's bounds: only x9 >= 0). At x9 = 0 the
+    limits x3 x9 >= 0 and -x5 x9 >= 0 and the bound x9 >= 0 have gradients along x9 alone,
+    so their multipliers are not unique: the QP's ended at 4e5 and 6e5, whose Hessians'
+    cross terms gave x3 and x5 curvatures of 1e6, and steps of 3e-7 crawled to
+    "max_steps_reached" at a point 0.5 from stationary. At the optimum the three hold with no
+    multiplier, and the polish, without them, moved to x9 < 0 ("limit_violated"). The
+    optimum is not isolated (the book's x* is one point of a family with equal f), so f is
+    compared with the published f*, and x with the limits and the bound."""
+    result = solve(HS108.problem())
+    assert result.status == "successful", (result.status, result.parameters)
+    assert result.outputs["f"] == pytest.approx(HS108.value, rel=1e-9)
+    x = [result.parameters[f"x{i + 1}"] for i in range(9)]
+    assert x[8] == pytest.approx(0.0, abs=1e-9)
+    assert min(float(g(x)) for g in HS108.g) >= -1e-9
 
 
 UNREACHABLE = {
