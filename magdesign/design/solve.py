@@ -399,16 +399,17 @@ def _hessian_multipliers(jet, last: _Step, bound_multipliers):
     """(m,) the multipliers that weight the rows' Hessians in the next subproblem: the
     ``last`` step's, those of its active rows replaced by the least-norm ones that give
     the same combination of gradients, with the bounds' (``bound_multipliers`` (2n,):
-    lower, then upper; the radius's, where it limits the step). A row priced at the
-    elastic cost keeps its multiplier: the linearisation cannot meet it, and its
-    multiplier is the price of its violation, not a share of a combination (min x with
-    x^2 + 1 = 1/2, projected with the radius's multiplier, got a Hessian 1e-9 of the
-    elastic one, and steps to and fro across the point of least violation). Where active
-    rows are dependent, the QP's multipliers lie anywhere in an unbounded set, and its
-    interior-point method ends half way to the elastic price: at hs108's x9 = 0, where x3 x9 >= 0, -x5 x9 >= 0 and x9 >= 0 all have gradients along
-    x9, two multipliers of 4e5 and 6e5 whose Hessians' cross terms, made definite, gave x3
-    and x5 curvatures of 1e6; steps of 3e-7 crawled to "max_steps_reached" at a point far
-    from stationary."""
+    lower, then upper; the radius's, where it limits the step). Where active rows are
+    dependent, the QP's multipliers lie anywhere in an unbounded set, and its
+    interior-point method ends half way to the elastic price: at hs108's x9 = 0, where
+    the limits x3 x9 and -x5 x9 (both at least 0) and the bound x9 at least 0 all have
+    gradients along x9, two multipliers of 4e5 and 6e5 whose Hessians' cross terms, made
+    definite, gave x3 and x5 curvatures of 1e6; steps of 3e-7 crawled to
+    "max_steps_reached" at a point far from stationary. A row priced at the elastic cost
+    keeps its multiplier: the linearisation cannot meet it, and its multiplier is the
+    price of its violation, not a share of a combination (min x with a target x^2 of -1/2,
+    projected with the radius's multiplier, got a Hessian a billionth of the elastic one,
+    and steps to and fro across the point of least violation)."""
     n = jet.J.shape[1]
     n_targets = last.multipliers.shape[0] - last.active_limits.shape[0]
     rows = jnp.concatenate([jnp.ones(n_targets, bool), last.active_limits])
