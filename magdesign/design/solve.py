@@ -410,7 +410,6 @@ def _hessian_multipliers(jet, last: _Step, bound_multipliers):
     price of its violation, not a share of a combination (min x with a target x^2 of -1/2,
     projected with the radius's multiplier, got a Hessian a billionth of the elastic one,
     and steps to and fro across the point of least violation)."""
-    n = jet.J.shape[1]
     n_targets = last.multipliers.shape[0] - last.active_limits.shape[0]
     rows = jnp.concatenate([jnp.ones(n_targets, bool), last.active_limits])
     rows = rows & (jnp.abs(last.multipliers) < (1.0 - _ELASTIC_ROUNDING) * DESIGN_ELASTIC)
