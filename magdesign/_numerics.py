@@ -99,8 +99,12 @@ DESIGN_ELASTIC = 1e6
 # - the smallest eigenvalue of the QP's Hessian, relative to its largest (plus 1): the
 #   Hessian of the Lagrangian with its eigenvalues' moduli, made definite by this floor
 #   (which bounds a step where the model is flat to 1e4 box widths, so the QP's own
-#   1e-12 residuals move it by 1e-8 at most; not where the targets fix the step);
+#   1e-12 residuals move it by 1e-8 at most; not where the targets fix the step, nor the
+#   limits that a first solve holds with a multiplier above DESIGN_HELD_MULTIPLIER, in a
+#   second solve: a multiplier as small as hs084's 2e-8 held its limit too weakly to stand
+#   in for the floor, and the steps went to and fro to "max_steps_reached");
 DESIGN_HESSIAN_FLOOR = 1e-4
+DESIGN_HELD_MULTIPLIER = 1e-4
 #   a curvature of either sign whose modulus is above DESIGN_KEPT_CURVATURE (relative, as
 #   that floor) keeps its modulus: raised to the floor, a degenerate minimum's vanishing
 #   curvature (x^4 at 0) turned Newton's steps into gradient steps that crawl (min x^4
@@ -132,8 +136,10 @@ DESIGN_GRADIENT_FLOOR = 1e-6
 # - the active constraints' null space: directions whose singular value is below this,
 #   relative to the largest, are free (the rows are O(1) gradients, so 1e-9 separates a
 #   dependent row from rounding by several decades either way); also the regulariser,
-#   relative to their squared sizes (plus 1), of the targets' gradients on the flat
-#   directions of the QP's Hessian, whose floor is taken off along them;
+#   relative to their squared sizes (plus 1), of the targets' and held limits' gradients
+#   on the flat directions of the QP's Hessian, whose floor is taken off along them; and
+#   the least share of a limit's squared gradient on those directions for a second
+#   solve to hold it;
 DESIGN_NULL_SPACE_RTOL = 1e-9
 # - the polish (a Newton root find on the KKT or feasibility equations) refines the
 #   search's point; a root further than this (scaled variables, box width 1) from it is

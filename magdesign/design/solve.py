@@ -7,7 +7,9 @@ to its target or limit. It has two stages:
 
 1. sequential quadratic programming (ours): at each accepted point the quadratic model
    (the Hessian of the Lagrangian at the least-norm multipliers of the last step's active
-   rows, made definite by taking its eigenvalues' moduli) is
+   rows, made definite by taking its eigenvalues' moduli, the smallest raised to a floor
+   except along the rows that fix the step: the targets, and the limits that a first
+   solve holds, in a second solve, :func:`_settled_step`) is
    minimised subject to the linearised targets and limits, the box and a radius (an
    inf-norm trust region: none until the line search first shortens a step, then the
    length it shortened the last one to, doubled after each whole step that reaches
@@ -94,6 +96,7 @@ from magdesign._numerics import (
     DESIGN_ESCAPES,
     DESIGN_FLAT_CURVATURE,
     DESIGN_GRADIENT_FLOOR,
+    DESIGN_HELD_MULTIPLIER,
     DESIGN_HESSIAN_FLOOR,
     DESIGN_KEPT_CURVATURE,
     DESIGN_NULL_SPACE_RTOL,
@@ -338,16 +341,22 @@ def subproblem_box(n, n_targets, n_limits):
 
 
 def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius=jnp.inf):
-    """The QP of one step at y, as (Q, q, A, b, G, h) for :func:`solve_qp`: minimise the
-    quadratic model of the Lagrangian subject to the linearised rows and the box, each
-    target row relaxed by two elastic slacks and each limit row by one, costing
-    DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits), |d_i| <= radius.
-    The quadratic term is the Hessian of the Lagrangian with its eigenvalues' moduli,
-    those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except one above
-    DESIGN_KEPT_CURVATURE, which stays (see there), and less the floor again along the
-    targets' gradients projected onto the flat directions, where the targets'
-    linearisation fixes the step. Without an objective it is |d|^2 / 2 (the minimum-norm
-    step of Gauss-Newton)."""
+    """The QP of one step, (Q, q, A, b, G, h), holding no limit: :func:`_subproblem`'s first part."""
+    return _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, None)[0]
+
+
+def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits):
+    """((Q, q, A, b, G, h), flat): the QP of one step at y for :func:`solve_qp`, and the
+    flat directions of its Hessian (n, n) (the eigenvectors that got the floor; the
+    others zeroed). The QP: minimise the quadratic model of the Lagrangian subject to the
+    linearised rows and the box, each target row relaxed by two elastic slacks and each
+    limit row by one, costing DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of
+    limits), |d_i| <= radius. The quadratic term is the Hessian of the Lagrangian with its
+    eigenvalues' moduli, those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except
+    one above DESIGN_KEPT_CURVATURE, which stays (see there), and less the floor again
+    along the gradients of the targets and of the ``held_limits`` (l,) (bool; None: none)
+    projected onto the flat directions, where their linearisation fixes the step. Without
+    an objective it is |d|^2 / 2 (the minimum-norm step of Gauss-Newton)."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     m = c.shape[0]
@@ -362,20 +371,23 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
     else:
         moduli = jnp.maximum(moduli, 1.0)
     hessian = (vectors * moduli) @ vectors.T
-    if has_objective and n_targets:
+    flat = vectors * ~kept if has_objective else jnp.zeros_like(vectors)
+    fixing = J_c[:n_targets]  # the rows whose linearisation fixes the step
+    if held_limits is not None:
+        fixing = jnp.concatenate([fixing, jnp.where(held_limits[:, None], J_c[n_targets:], 0.0)])
+    if has_objective and fixing.shape[0]:
         # The floor bounds steps along flat directions; along those that the targets'
         # linearisation fixes it only slows the step: x^4 on x + y = 1, where y is flat, got
         # the floor's curvature along the target's line and crawled (steps of 1/130 of
         # Newton's, "max_steps_reached" 4e-4 from the minimum). Off: on the span of the
         # targets' gradients projected onto the flat directions (regularised by
         # DESIGN_NULL_SPACE_RTOL of their squared sizes, so that a gradient barely in the
-        # flat directions removes barely any floor). Limits are left out: which hold is
-        # known only after the QP (with the last step's active ones, hs106's polish ended
-        # 1.9e-10 outside a limit).
-        flat = vectors * ~kept
-        spread = flat @ (flat.T @ J_c[:n_targets].T)  # (n, targets)
+        # flat directions removes barely any floor). Limits only where a first solve
+        # holds them (see _settled_step): which hold is known only after the QP (with the
+        # last step's active ones, hs106's polish ended 1.9e-10 outside a limit).
+        spread = flat @ (flat.T @ fixing.T)  # (n, rows)
         gram = spread.T @ spread
-        gram = gram + DESIGN_NULL_SPACE_RTOL * (1.0 + jnp.trace(gram)) * jnp.eye(n_targets)
+        gram = gram + DESIGN_NULL_SPACE_RTOL * (1.0 + jnp.trace(gram)) * jnp.eye(fixing.shape[0])
         hessian = hessian - floor * spread @ jnp.linalg.solve(gram, spread.T)
     n_slack = 2 * n_targets + n_limits
     nw = n + n_slack
@@ -392,7 +404,13 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
         ]
     )
     h = jnp.concatenate([-c[n_targets:], jnp.minimum(y_max - y, radius), jnp.minimum(y, radius), jnp.zeros(n_slack)])
-    return Q, q, A, -c[:n_targets], G, h
+    return (Q, q, A, -c[:n_targets], G, h), flat
+
+
+def _elastic(multipliers):
+    """Where multipliers are priced at the elastic cost (DESIGN_ELASTIC, to rounding): their
+    rows' linearisation cannot be met."""
+    return jnp.abs(multipliers) >= (1.0 - _ELASTIC_ROUNDING) * DESIGN_ELASTIC
 
 
 def _hessian_multipliers(jet, last: _Step, bound_multipliers):
@@ -412,7 +430,7 @@ def _hessian_multipliers(jet, last: _Step, bound_multipliers):
     and steps to and fro across the point of least violation)."""
     n_targets = last.multipliers.shape[0] - last.active_limits.shape[0]
     rows = jnp.concatenate([jnp.ones(n_targets, bool), last.active_limits])
-    rows = rows & (jnp.abs(last.multipliers) < (1.0 - _ELASTIC_ROUNDING) * DESIGN_ELASTIC)
+    rows = rows & ~_elastic(last.multipliers)
     lower, upper = jnp.split(bound_multipliers, 2)
     fixed = (jnp.maximum(lower, upper) > DESIGN_ACTIVE_MULTIPLIER) | last.at_lower | last.at_upper
     matrix = _active_matrix(jet, rows, fixed)  # (m + n, n)
@@ -422,22 +440,27 @@ def _hessian_multipliers(jet, last: _Step, bound_multipliers):
     return jnp.where(rows, least[: last.multipliers.shape[0]], last.multipliers)
 
 
-def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_objective, radius):
+def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_objective, radius, held_limits=None):
     """The :func:`subproblem`'s solution at y, its QP's rows active at the ``last`` step
     taken as a guess; the ``last`` step's multipliers, with its ``bound_multipliers``
     (2n,), weight the rows' Hessians (:func:`_hessian_multipliers`). The active set is
     the rows and bounds that the step ends on (within DESIGN_ON_CONSTRAINT without an
     objective, whose multipliers say nothing; with one, to rounding) and those with a
     positive multiplier (a bound only where it, not the ``radius``, limits the step).
-    Returns the :class:`_Step` and the bounds' multipliers (2n,): lower, then upper (0
-    where below the bound's slack)."""
+    ``held_limits``: see :func:`_subproblem`. Returns the :class:`_Step`, the bounds'
+    multipliers (2n,): lower, then upper (0 where below the bound's slack), and (l,) the
+    limits that the step holds and whose gradients reach into the QP's flat directions,
+    with whether its QP was solved (a finite answer)."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     n_limits = c.shape[0] - n_targets
     multipliers = _hessian_multipliers(jet, last, bound_multipliers) if has_objective else last.multipliers
-    Q, q, A, b, G, h = subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius)
+    (Q, q, A, b, G, h), flat = _subproblem(
+        jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits
+    )
     qp = solve_qp(Q, q, A, b, G, h, guess=last.qp_rows, box=subproblem_box(n, n_targets, n_limits))
     # A subproblem that failed (non-finite) offers no step; the polish then judges the point.
+    solved = jnp.all(jnp.isfinite(jnp.concatenate([qp.w, qp.y, qp.z])))
     qp = jax.tree.map(lambda a: jnp.where(jnp.isfinite(a), a, 0.0) if a.dtype == jnp.float64 else a, qp)
     d = qp.w[:n]
     # each (limit rows, upper bounds, lower bounds): their multipliers, and their slacks after the step
@@ -473,6 +496,12 @@ def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_
         active_limits, at_lower, at_upper = (strong | weak for strong, weak in zip(held, weakly))
     else:
         active_limits, at_lower, at_upper = ends_on(DESIGN_ON_CONSTRAINT)
+    # The limits that the step holds by a multiplier (above DESIGN_HELD_MULTIPLIER, and not
+    # priced at the elastic cost) and whose gradients reach into the flat directions:
+    # _settled_step solves again with the floor off along them.
+    J_l = J_c[n_targets:]
+    reach = jnp.sum((flat.T @ J_l.T) ** 2, axis=0) > DESIGN_NULL_SPACE_RTOL * jnp.sum(J_l**2, axis=1)
+    holds = (limit_multipliers > jnp.maximum(DESIGN_HELD_MULTIPLIER, limit_slack)) & ~_elastic(limit_multipliers)
     return _Step(
         d=d,
         multipliers=jnp.concatenate([qp.y, limit_multipliers]),
@@ -481,30 +510,76 @@ def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_
         at_lower=at_lower,
         at_upper=at_upper,
         qp_rows=qp.z > DESIGN_ACTIVE_MULTIPLIER,
-    ), jnp.concatenate([lower_multipliers, upper_multipliers])
+    ), jnp.concatenate([lower_multipliers, upper_multipliers]), (holds & reach, solved)
+
+
+class _Solves(NamedTuple):
+    """:func:`_settled_step`'s loop: the latest step, its bounds' multipliers and whether
+    its QP was solved; the solves made; the first solve's step and bounds' multipliers, the
+    limits (l,) that it holds and whose gradients reach into the flat directions (which
+    the second solve is to hold), and whether its step was shorter than xtol."""
+
+    step: _Step
+    bound_multipliers: Array
+    solved: Array
+    trips: Array
+    first: _Step
+    first_bound_multipliers: Array
+    held_limits: Array
+    short: Array
 
 
 def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, radius, xtol):
-    """:func:`_step` (with an objective), solved once more where its step is shorter than
-    ``xtol``, now with the Hessian of the Lagrangian at its own multipliers (as
-    :func:`_hessian_multipliers` makes them). The first
-    solve's Hessian takes the ``last`` point's multipliers, which after an infeasible
-    (elastic) subproblem are priced at DESIGN_ELASTIC and then fall by orders of magnitude
-    a step; a Hessian that large makes a step short at a point that is not stationary
-    (hs063 stopped after 6 steps, "infeasible_target", with the objective's gradient 0.3
-    off the constraints' span). One QP in a loop of at most two trips, not two QPs: the
-    program stays the size it was."""
+    """:func:`_step` with an objective, solved up to three times: one QP in a loop, not
+    three QPs, so the program stays the size it was.
 
-    def solve(carry):
-        last, bound_multipliers, trips = carry
-        return (*_step(jet, y, y_max, last, bound_multipliers, weight, n_targets, True, radius), trips + 1)
+    A second solve, from the first (its multipliers weight the Hessian of the Lagrangian,
+    as :func:`_hessian_multipliers` makes them, and its active rows are the QP's guess),
+    runs where the first step is shorter than ``xtol``: the first solve's Hessian takes the
+    ``last`` point's multipliers, which after an infeasible (elastic) subproblem are priced
+    at DESIGN_ELASTIC and then fall by orders of magnitude a step; a Hessian that large
+    makes a step short at a point that is not stationary (hs063 stopped after 6 steps,
+    "infeasible_target", with the objective's gradient 0.3 off the constraints' span).
 
-    def again(carry):
-        step, _, trips = carry
-        return (trips == 0) | ((trips == 1) & (jnp.max(jnp.abs(step.d)) <= xtol))
+    It also runs where the first step holds limits whose gradients reach into the flat
+    directions (:func:`_step`), and takes the floor off along them, as along the targets.
+    The floor made the steps crawl to a degenerate minimum on a limit: min x^4 - (x + y)
+    with x + y at most 1, from (1, -0.5), ended "max_steps_reached" after 100 evaluations,
+    a millionth and a half from (0, 1); hs097 and hs098 from their published start ended at
+    another vertex. Off along a limit, the floor no longer bounds the step away from it, so
+    the second step stands only where its QP was solved and it still holds those limits;
+    else the first step does, or, where that was short, a third solve as the second was
+    before (from the first, with the floor)."""
 
-    step, bound_multipliers, _ = jax.lax.while_loop(again, solve, (last, bound_multipliers, jnp.asarray(0)))
-    return step, bound_multipliers
+    def solve(solves):
+        source = _pick(solves.trips == 0, (last, bound_multipliers), (solves.first, solves.first_bound_multipliers))
+        held = solves.held_limits & (solves.trips == 1)
+        step, multipliers, (reaching, solved) = _step(jet, y, y_max, *source, weight, n_targets, True, radius, held)
+        first = solves.trips == 0
+        return _Solves(
+            step,
+            multipliers,
+            solved,
+            solves.trips + 1,
+            *_pick(first, (step, multipliers), (solves.first, solves.first_bound_multipliers)),
+            jnp.where(first, reaching, solves.held_limits),
+            jnp.where(first, jnp.max(jnp.abs(step.d)) <= xtol, solves.short),
+        )
+
+    def dropped(solves):
+        """The second solve failed, or its step left a limit that it was to hold."""
+        left = jnp.any(solves.held_limits & ~solves.step.active_limits)
+        return (solves.trips == 2) & jnp.any(solves.held_limits) & (left | ~solves.solved)
+
+    def again(solves):
+        second = (solves.trips == 1) & (solves.short | jnp.any(solves.held_limits))
+        return (solves.trips == 0) | second | (dropped(solves) & solves.short)
+
+    no, none = jnp.asarray(False), jnp.zeros_like(last.active_limits)
+    start = _Solves(last, bound_multipliers, ~no, jnp.asarray(0), last, bound_multipliers, none, no)
+    solves = jax.lax.while_loop(again, solve, start)
+    first = (solves.first, solves.first_bound_multipliers)
+    return _pick(dropped(solves), first, (solves.step, solves.bound_multipliers))
 
 
 def _active_matrix(jet, rows, fixed):
@@ -693,7 +768,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
                 jet, y, y_max, state.step, state.bound_multipliers, state.weight, n_targets, radius, xtol
             )
         else:  # the Hessians are not used (see _jet): one solve
-            step, bound_multipliers = _step(
+            step, bound_multipliers, _ = _step(
                 jet, y, y_max, state.step, state.bound_multipliers, state.weight, n_targets, False, radius
             )
         # The penalty stays at least max(twice the multipliers, _PENALTY_FLOOR) and falls

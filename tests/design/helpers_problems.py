@@ -87,6 +87,36 @@ HS057_B = np.array([0.49, 0.49, 0.48, 0.47, 0.48, 0.47, 0.46, 0.46, 0.45, 0.43, 
                     0.43, 0.46, 0.45, 0.42, 0.42, 0.43, 0.41, 0.41, 0.40, 0.42, 0.40, 0.40, 0.41, 0.40, 0.41,
                     0.41, 0.40, 0.40, 0.40, 0.38, 0.41, 0.40, 0.40, 0.41, 0.38, 0.40, 0.40, 0.39, 0.39])
 
+
+def hs095_family(name, b):
+    """hs095 to hs098: a linear objective on a box, under four bilinear limits c_i(x) >= b_i
+    that differ only in b. Each optimum holds one limit with every variable but one on a
+    bound, so that variable solves that limit's (linear) equation: x6 = b1 / 1495.5 in
+    hs095 and hs096; x1 from c1 = b1 with x5, x6 on their upper bounds in hs097 and hs098
+    (the book gives 0.00332331 and 0.2685649)."""
+    c = [
+        lambda x: (17.1 * x[0] + 38.2 * x[1] + 204.2 * x[2] + 212.3 * x[3] + 623.4 * x[4] + 1495.5 * x[5]
+                   - 169.0 * x[0] * x[2] - 3580.0 * x[2] * x[4] - 3810.0 * x[3] * x[4] - 18500.0 * x[3] * x[5]
+                   - 24300.0 * x[4] * x[5]),
+        lambda x: (17.9 * x[0] + 36.8 * x[1] + 113.9 * x[2] + 169.7 * x[3] + 337.8 * x[4] + 1385.2 * x[5]
+                   - 139.0 * x[0] * x[2] - 2450.0 * x[3] * x[4] - 16600.0 * x[3] * x[5] - 17200.0 * x[4] * x[5]),
+        lambda x: -273.0 * x[1] - 70.0 * x[3] - 819.0 * x[4] + 26000.0 * x[3] * x[4],
+        lambda x: 159.9 * x[0] - 311.0 * x[1] + 587.0 * x[3] + 391.0 * x[4] + 2198.0 * x[5] - 14000.0 * x[0] * x[5],
+    ]
+    upper = [0.31, 0.046, 0.068, 0.042, 0.028, 0.0134]
+    if b[0] < 10.0:  # hs095, hs096 (b1 = 4.97; hs097, hs098: 32.97)
+        optimum = [0.0] * 5 + [b[0] / 1495.5]
+    else:  # hs097, hs098
+        x5, x6 = upper[4], upper[5]
+        optimum = [(b[0] - 623.4 * x5 - 1495.5 * x6 + 24300.0 * x5 * x6) / 17.1, 0.0, 0.0, 0.0, x5, x6]
+
+    def f(x):
+        return 4.3 * x[0] + 31.8 * x[1] + 63.3 * x[2] + 15.8 * x[3] + 68.5 * x[4] + 4.7 * x[5]
+
+    return Published(name, f, [(0.0, u) for u in upper], [0.0] * 6, optimum, f(optimum),
+                     g=[lambda x, ci=ci, bi=bi: ci(x) - bi for ci, bi in zip(c, b)])
+
+
 HOCK_SCHITTKOWSKI = [
     Published("hs001", rosenbrock, [(-BOX, BOX), (-1.5, BOX)], [-2.0, 1.0], [1.0, 1.0], 0.0),
     Published("hs003", lambda x: x[1] + 1e-5 * (x[1] - x[0]) ** 2, [(-BOX, BOX), (0.0, BOX)], [10.0, 1.0], [0.0, 0.0], 0.0),
@@ -395,4 +425,10 @@ HOCK_SCHITTKOWSKI = [
             lambda x: x[3] - ndtr(2.0 - x[1]) - ndtr(-2.0 - x[1]),
         ],
     ),
+    # hs097 and hs098 ended "successful" at another vertex from their (infeasible) start
+    # (f = 4.0712) until the QP took the floor off along the limits it holds
+    hs095_family("hs095", [4.97, -1.88, -29.08, -78.02]),
+    hs095_family("hs096", [4.97, -1.88, -69.08, -118.02]),
+    hs095_family("hs097", [32.97, 25.12, -29.08, -78.02]),
+    hs095_family("hs098", [32.97, 25.12, -124.08, -173.02]),
 ]

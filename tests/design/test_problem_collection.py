@@ -225,6 +225,23 @@ def test_a_degenerate_minimum_on_a_target_is_found():
     assert result.parameters["y"] == pytest.approx(1.0, abs=1e-6)
 
 
+def test_a_degenerate_minimum_on_a_limit_is_found():
+    """min x^4 - (x + y) under x + y <= 1, [-2, 2]^2, from (1, -0.5): the minimum is (0, 1)
+    (f >= x^4 - 1 >= -1 wherever x + y <= 1, with equality only there). The limit holds
+    with multiplier 1 and x^4's curvature vanishes at 0; the floor on the flat y became
+    curvature along the limit's line, as along a target's, and the steps crawled:
+    "max_steps_reached" 1.5e-6 from the minimum after 100 evaluations. x is as good as a
+    quartic's stationarity tolerance allows (f - f* = x^4)."""
+    problem = Problem(lambda v: {"f": v["x"] ** 4 - (v["x"] + v["y"]), "s": v["x"] + v["y"]},
+                      [Variable("x", -2.0, 2.0, start=1.0), Variable("y", -2.0, 2.0, start=-0.5)],
+                      limits=[Limit("s", upper=1.0)], objective=Objective("f", "min"))
+    result = solve(problem)
+    assert result.status == "successful", (result.status, result.parameters)
+    assert result.parameters["x"] == pytest.approx(0.0, abs=1e-5)
+    assert result.parameters["y"] == pytest.approx(1.0, abs=1e-5)
+    assert result.outputs["f"] == pytest.approx(-1.0, abs=1e-12)
+
+
 def test_a_minimum_too_flat_for_the_polish_stands_at_the_searchs_point():
     """min x^6 on [-2, 2] from 1: the search stops where x^6's gradient is below its
     tolerance (x ~ 5e-3, f ~ 1e-14 of its value at the start), and Newton's steps from there
