@@ -8,6 +8,9 @@ Prints:
   dome level and, unless skipped, the axisymmetric one;
 - the same first call at the Reissner level in new processes, as `magdesign solve` makes it:
   on an empty persistent cache, and three times with the cache the first run filled;
+- where that first call goes, in a new process without the cache: the seconds (wall and
+  CPU) of tracing the solver's program, lowering it to StableHLO and compiling it with XLA,
+  and the compiled program's size (fusions: XLA compiles each into a kernel of its own);
 - a vmapped batch of 10,000 target compliances at the Reissner level, and the same
   10,000 designs solved the usual way without magdesign: scipy's brentq on the same closed
   forms (Reissner's dome compliance for the wall, seed 001 Eq. 1 on the axis for the gap
@@ -81,6 +84,50 @@ began = time.perf_counter()
 result = solve(problem)
 print(time.perf_counter() - began, result.status)
 """
+
+
+# The stages of the solver's first call at the Reissner level, in a new process without a
+# persistent cache: prints (stage, wall s, CPU s) per line, then the compiled program's
+# fusions and instructions.
+FIRST_CALL_STAGES = """
+import importlib, re, resource, time
+from magdesign._tracing import gc_paused
+from magdesign.design.spec import default_spec, problem_from_spec
+solver = importlib.import_module("magdesign.design.solve")
+problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
+settings = solver.settings_of(solver.DESIGN_RTOL, solver.DESIGN_ATOL, 100)
+key, arrays = solver._structure(problem, settings)
+host = solver._host(problem)
+program = solver._compiled(key, False)
+clock = lambda: (time.perf_counter(), sum(resource.getrusage(resource.RUSAGE_SELF)[:2]))
+with solver._errors_as_nan(), gc_paused():
+    began = clock()
+    traced = program.trace(arrays, host.y0, host.theta)
+    traced_at = clock()
+    lowered = traced.lower()
+    lowered_at = clock()
+    compiled = lowered.compile()
+    compiled_at = clock()
+for stage, (a, b) in (("trace", (began, traced_at)), ("lower", (traced_at, lowered_at)),
+                      ("compile", (lowered_at, compiled_at))):
+    print(stage, b[0] - a[0], b[1] - a[1])
+text = compiled.as_text()
+print("size", len(re.findall(r"= [^=]* fusion\\(", text)), len(re.findall(r"\\n  +(?:ROOT )?%", text)))
+"""
+
+
+def first_call_rows():
+    env = {**os.environ, "JAX_ENABLE_COMPILATION_CACHE": "false"}
+    out = subprocess.run([sys.executable, "-c", FIRST_CALL_STAGES], env=env, capture_output=True, text=True, check=True)
+    rows = [("first call, new process", "wall (s)", "CPU (s)")]
+    for line in out.stdout.splitlines():
+        stage, *numbers = line.split()
+        if stage == "size":
+            fusions, instructions = numbers
+        else:
+            rows.append((stage, f"{float(numbers[0]):.2f}", f"{float(numbers[1]):.2f}"))
+    table(rows)
+    print(f"compiled program: {fusions} fusions in {instructions} instructions")
 
 
 def fresh_process_rows():
@@ -222,6 +269,8 @@ def main():
     design_rows("--skip-axisymmetric" in sys.argv)
     print()
     fresh_process_rows()
+    print()
+    first_call_rows()
     print()
     qp_rows()
 

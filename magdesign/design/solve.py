@@ -326,6 +326,13 @@ class _Step(eqx.Module):
     qp_rows: Bool[Array, " mi"]
 
 
+def _held_rows(step: _Step):
+    """(m,) the constraint rows that a step holds as equations: every target, and the
+    limits active there."""
+    n_targets = step.multipliers.shape[0] - step.active_limits.shape[0]
+    return jnp.concatenate([jnp.ones(n_targets, bool), step.active_limits])
+
+
 def _no_slack_rows(n, n_targets, n_limits):
     """The first step's guess of the subproblem's active rows (see :func:`subproblem` for
     their order): every elastic slack at zero, no limit or bound active."""
@@ -428,9 +435,7 @@ def _hessian_multipliers(jet, last: _Step, bound_multipliers):
     price of its violation, not a share of a combination (min x with a target x^2 of -1/2,
     projected with the radius's multiplier, got a Hessian a billionth of the elastic one,
     and steps to and fro across the point of least violation)."""
-    n_targets = last.multipliers.shape[0] - last.active_limits.shape[0]
-    rows = jnp.concatenate([jnp.ones(n_targets, bool), last.active_limits])
-    rows = rows & ~_elastic(last.multipliers)
+    rows = _held_rows(last) & ~_elastic(last.multipliers)
     lower, upper = jnp.split(bound_multipliers, 2)
     fixed = (jnp.maximum(lower, upper) > DESIGN_ACTIVE_MULTIPLIER) | last.at_lower | last.at_upper
     matrix = _active_matrix(jet, rows, fixed)  # (m + n, n)
@@ -517,7 +522,7 @@ class _Solves(NamedTuple):
     """:func:`_settled_step`'s loop: the latest step, its bounds' multipliers and whether
     its QP was solved; the solves made; the first solve's step and bounds' multipliers, the
     limits (l,) that it holds and whose gradients reach into the flat directions (which
-    the second solve is to hold), and whether its step was shorter than xtol."""
+    the second solve is to hold)."""
 
     step: _Step
     bound_multipliers: Array
@@ -526,7 +531,6 @@ class _Solves(NamedTuple):
     first: _Step
     first_bound_multipliers: Array
     held_limits: Array
-    short: Array
 
 
 def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, radius, xtol):
@@ -563,7 +567,6 @@ def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targe
             solves.trips + 1,
             *_pick(first, (step, multipliers), (solves.first, solves.first_bound_multipliers)),
             jnp.where(first, reaching, solves.held_limits),
-            jnp.where(first, jnp.max(jnp.abs(step.d)) <= xtol, solves.short),
         )
 
     def dropped(solves):
@@ -572,11 +575,12 @@ def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targe
         return (solves.trips == 2) & jnp.any(solves.held_limits) & (left | ~solves.solved)
 
     def again(solves):
-        second = (solves.trips == 1) & (solves.short | jnp.any(solves.held_limits))
-        return (solves.trips == 0) | second | (dropped(solves) & solves.short)
+        short = jnp.max(jnp.abs(solves.first.d)) <= xtol
+        second = (solves.trips == 1) & (short | jnp.any(solves.held_limits))
+        return (solves.trips == 0) | second | (dropped(solves) & short)
 
-    no, none = jnp.asarray(False), jnp.zeros_like(last.active_limits)
-    start = _Solves(last, bound_multipliers, ~no, jnp.asarray(0), last, bound_multipliers, none, no)
+    none = jnp.zeros_like(last.active_limits)
+    start = _Solves(last, bound_multipliers, jnp.asarray(True), jnp.asarray(0), last, bound_multipliers, none)
     solves = jax.lax.while_loop(again, solve, start)
     first = (solves.first, solves.first_bound_multipliers)
     return _pick(dropped(solves), first, (solves.step, solves.bound_multipliers))
@@ -733,8 +737,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
 
     def bend_operands(state):
         """:func:`_bend`'s operands for the step at the accepted point: its active rows."""
-        rows = jnp.concatenate([jnp.ones(n_targets, bool), state.step.active_limits])
-        return state.jet, state.step.d, rows, state.step.at_lower | state.step.at_upper
+        return state.jet, state.step.d, _held_rows(state.step), state.step.at_lower | state.step.at_upper
 
     def accept(state, y, jet):
         """Take y as the new point: solve the subproblem there and choose what comes next."""
@@ -1137,7 +1140,7 @@ def _equations(problem: Problem, search: _State, y_max):
     system with an objective, else the feasibility equations."""
     step = search.step
     active = _Active(step.active_limits, step.at_lower, step.at_upper)
-    held = jnp.concatenate([jnp.ones(len(problem.targets), bool), active.limits])
+    held = _held_rows(step)
     if problem.objective is None:
         return _Feasibility(problem, active, held, y_max)
     return _KKT(problem, search.weight, active, held, y_max)
