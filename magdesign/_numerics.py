@@ -113,6 +113,14 @@ DESIGN_HELD_MULTIPLIER = 1e-4
 #   steps of 3e-6 box widths). The floor still bounds the flat directions, where a step has
 #   no curvature to stop it;
 DESIGN_KEPT_CURVATURE = 1e-8
+#   where the rows and bounds that the last step held are dependent (more of them than
+#   their rank) at a point that meets every row within DESIGN_DEPENDENT_MET (l1, scaled),
+#   the Hessian is made definite on their null space apart from the rest: there the
+#   moduli of the whole Hessian's curvatures of both signs add up, and at hs116's optimum
+#   (13 rows of rank 12 in 13 variables, curvatures from -6.8 to 6.7) they gave the one
+#   direction left free a curvature of 0.73 where the Lagrangian's own is 0: steps of
+#   6e-5 crawled to "max_steps_reached" 1e-5 (relative) above the optimum's value;
+DESIGN_DEPENDENT_MET = 1e-5
 # - a limit row or bound is active where its QP multiplier exceeds this (with an
 #   objective; also where the step ends on it to rounding, weakly active), or where the
 #   step ends within DESIGN_ON_CONSTRAINT of it (without one);

@@ -9,7 +9,9 @@ to its target or limit. It has two stages:
    (the Hessian of the Lagrangian at the least-norm multipliers of the last step's active
    rows, made definite by taking its eigenvalues' moduli, the smallest raised to a floor
    except along the rows that fix the step: the targets, and the limits that a first
-   solve holds, in a second solve, :func:`_settled_step`) is
+   solve holds, in a second solve, :func:`_settled_step`; where the last step's active
+   rows are dependent at a point that nearly meets them, made definite on their null
+   space apart from the rest) is
    minimised subject to the linearised targets and limits, the box and a radius (an
    inf-norm trust region: none until the line search first shortens a step, then the
    length it shortened the last one to, doubled after each whole step that reaches
@@ -92,6 +94,7 @@ from magdesign._numerics import (
     DESIGN_CHAIN,
     DESIGN_CHUNK,
     DESIGN_CURVATURE_TOL,
+    DESIGN_DEPENDENT_MET,
     DESIGN_ELASTIC,
     DESIGN_ESCAPES,
     DESIGN_FLAT_CURVATURE,
@@ -352,31 +355,41 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
     return _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, None)[0]
 
 
-def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits):
+def _definite(eigenvalues, size):
+    """The moduli of a Hessian's ``eigenvalues``, those below DESIGN_KEPT_CURVATURE times
+    ``size`` raised to DESIGN_HESSIAN_FLOOR times it; and where they were kept."""
+    moduli = jnp.abs(eigenvalues)
+    kept = moduli >= DESIGN_KEPT_CURVATURE * size
+    return jnp.maximum(moduli, jnp.where(kept, 0.0, DESIGN_HESSIAN_FLOOR * size)), kept
+
+
+def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits, last_held=None):
     """((Q, q, A, b, G, h), flat): the QP of one step at y for :func:`solve_qp`, and the
     flat directions of its Hessian (n, n) (the eigenvectors that got the floor; the
-    others zeroed). The QP: minimise the quadratic model of the Lagrangian subject to the
+    others zeroed; those of the whole Hessian, where the dependent rows split it). The QP: minimise the quadratic model of the Lagrangian subject to the
     linearised rows and the box, each target row relaxed by two elastic slacks and each
     limit row by one, costing DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of
     limits), |d_i| <= radius. The quadratic term is the Hessian of the Lagrangian with its
     eigenvalues' moduli, those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except
     one above DESIGN_KEPT_CURVATURE, which stays (see there), and less the floor again
     along the gradients of the targets and of the ``held_limits`` (l,) (bool; None: none)
-    projected onto the flat directions, where their linearisation fixes the step. Without
-    an objective it is |d|^2 / 2 (the minimum-norm step of Gauss-Newton)."""
+    projected onto the flat directions, where their linearisation fixes the step. Where the
+    rows and bounds ``last_held`` ((m,), (n,) bool: those that the last step held; None:
+    none) are dependent at a point that meets the rows, the Hessian on their null space
+    is the Lagrangian's own there made definite (DESIGN_DEPENDENT_MET). Without an
+    objective it is |d|^2 / 2 (the minimum-norm step of Gauss-Newton)."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     m = c.shape[0]
     n_limits = m - n_targets
-    eigenvalues, vectors = jnp.linalg.eigh(_lagrangian_hessian(jet, multipliers, weight))
-    moduli = jnp.abs(eigenvalues)
+    lagrangian = _lagrangian_hessian(jet, multipliers, weight)
+    eigenvalues, vectors = jnp.linalg.eigh(lagrangian)
     if has_objective:
-        size = 1.0 + jnp.max(moduli)
-        kept = moduli >= DESIGN_KEPT_CURVATURE * size
+        size = 1.0 + jnp.max(jnp.abs(eigenvalues))
         floor = DESIGN_HESSIAN_FLOOR * size
-        moduli = jnp.maximum(moduli, jnp.where(kept, 0.0, floor))
+        moduli, kept = _definite(eigenvalues, size)
     else:
-        moduli = jnp.maximum(moduli, 1.0)
+        moduli = jnp.maximum(jnp.abs(eigenvalues), 1.0)
     hessian = (vectors * moduli) @ vectors.T
     flat = vectors * ~kept if has_objective else jnp.zeros_like(vectors)
     fixing = J_c[:n_targets]  # the rows whose linearisation fixes the step
@@ -396,6 +409,18 @@ def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, ra
         gram = spread.T @ spread
         gram = gram + DESIGN_NULL_SPACE_RTOL * (1.0 + jnp.trace(gram)) * jnp.eye(fixing.shape[0])
         hessian = hessian - floor * spread @ jnp.linalg.solve(gram, spread.T)
+    if has_objective and last_held is not None:
+        # the cross terms between the null space and the rows' span are dropped (the rows'
+        # linearisation fixes the step's part in their span)
+        rows, fixed = last_held
+        vectors, null = _null_space(_active_matrix(jet, rows, fixed))
+        free, spanned = vectors * null, vectors * ~null  # (n, n) each, the other's columns zeroed
+        dependent = (jnp.sum(rows) + jnp.sum(fixed) > jnp.sum(~null)) & jnp.any(null)
+        dependent = dependent & (_violation(c, n_targets) <= DESIGN_DEPENDENT_MET)
+        reduced_eigenvalues, reduced_vectors = jnp.linalg.eigh(free.T @ lagrangian @ free)
+        reduced = (reduced_vectors * _definite(reduced_eigenvalues, size)[0]) @ reduced_vectors.T
+        split = free @ reduced @ free.T + spanned @ (spanned.T @ hessian @ spanned) @ spanned.T
+        hessian = jnp.where(dependent, split, hessian)
     n_slack = 2 * n_targets + n_limits
     nw = n + n_slack
     Q = jnp.zeros((nw, nw)).at[:n, :n].set(hessian)
@@ -420,9 +445,17 @@ def _elastic(multipliers):
     return jnp.abs(multipliers) >= (1.0 - _ELASTIC_ROUNDING) * DESIGN_ELASTIC
 
 
-def _hessian_multipliers(jet, last: _Step, bound_multipliers):
+def _last_held(last: _Step, bound_multipliers):
+    """((m,), (n,)) bool: the rows and bounds that the ``last`` step held, with its bounds'
+    multipliers (2n,); not the rows priced at the elastic cost (:func:`_elastic`)."""
+    lower, upper = jnp.split(bound_multipliers, 2)
+    fixed = (jnp.maximum(lower, upper) > DESIGN_ACTIVE_MULTIPLIER) | last.at_lower | last.at_upper
+    return _held_rows(last) & ~_elastic(last.multipliers), fixed
+
+
+def _hessian_multipliers(jet, last: _Step, bound_multipliers, last_held):
     """(m,) the multipliers that weight the rows' Hessians in the next subproblem: the
-    ``last`` step's, those of its active rows replaced by the least-norm ones that give
+    ``last`` step's, those of its active rows (``last_held``, :func:`_last_held`) replaced by the least-norm ones that give
     the same combination of gradients, with the bounds' (``bound_multipliers`` (2n,):
     lower, then upper; the radius's, where it limits the step). Where active rows are
     dependent, the QP's multipliers lie anywhere in an unbounded set, and its
@@ -435,9 +468,8 @@ def _hessian_multipliers(jet, last: _Step, bound_multipliers):
     price of its violation, not a share of a combination (min x with a target x^2 of -1/2,
     projected with the radius's multiplier, got a Hessian a billionth of the elastic one,
     and steps to and fro across the point of least violation)."""
-    rows = _held_rows(last) & ~_elastic(last.multipliers)
+    rows, fixed = last_held
     lower, upper = jnp.split(bound_multipliers, 2)
-    fixed = (jnp.maximum(lower, upper) > DESIGN_ACTIVE_MULTIPLIER) | last.at_lower | last.at_upper
     matrix = _active_matrix(jet, rows, fixed)  # (m + n, n)
     weights = jnp.concatenate([jnp.where(rows, last.multipliers, 0.0), jnp.where(fixed, upper - lower, 0.0)])
     combined = matrix.T @ weights
@@ -459,9 +491,10 @@ def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     n_limits = c.shape[0] - n_targets
-    multipliers = _hessian_multipliers(jet, last, bound_multipliers) if has_objective else last.multipliers
+    last_held = _last_held(last, bound_multipliers) if has_objective else None
+    multipliers = _hessian_multipliers(jet, last, bound_multipliers, last_held) if has_objective else last.multipliers
     (Q, q, A, b, G, h), flat = _subproblem(
-        jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits
+        jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits, last_held
     )
     qp = solve_qp(Q, q, A, b, G, h, guess=last.qp_rows, box=subproblem_box(n, n_targets, n_limits))
     # A subproblem that failed (non-finite) offers no step; the polish then judges the point.
@@ -593,6 +626,14 @@ def _active_matrix(jet, rows, fixed):
     return jnp.concatenate([jnp.where(rows[:, None], jet.J[1:], 0.0), jnp.where(fixed[:, None], jnp.eye(n), 0.0)])
 
 
+def _null_space(matrix):
+    """((n, n), (n,)): the right singular vectors of an (m + n, n) ``matrix`` as columns,
+    and which of them span its null space (singular value below DESIGN_NULL_SPACE_RTOL of
+    the largest)."""
+    _, singular, vt = jnp.linalg.svd(matrix, full_matrices=False)
+    return vt.T, singular <= DESIGN_NULL_SPACE_RTOL * jnp.max(singular, initial=0.0)
+
+
 def _bend(jet, d, rows, fixed):
     """(n,) the second-order correction of a step d: the least-norm w with
     J_i w = -d^T H_i d / 2 on the constraint ``rows`` (m,) and w_j = 0 on the ``fixed``
@@ -623,10 +664,8 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_ta
     strong = step.multipliers > DESIGN_ACTIVE_MULTIPLIER
     strong = strong.at[:n_targets].set(True)
     lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
-    # (n,) singular values: the matrix has m + n >= n rows
-    _, singular, vt = jnp.linalg.svd(_active_matrix(jet, strong, lower | upper), full_matrices=False)
-    null = singular <= DESIGN_NULL_SPACE_RTOL * jnp.max(singular, initial=0.0)
-    basis = vt.T * null  # (n, n), columns outside the null space zeroed
+    vectors, null = _null_space(_active_matrix(jet, strong, lower | upper))
+    basis = vectors * null  # (n, n), columns outside the null space zeroed
     size = 1.0 + jnp.max(jnp.abs(jnp.linalg.eigvalsh(hessian)))
     # the zeroed columns get curvature 2 size, so that only the null space's count
     eigenvalues, vectors = jnp.linalg.eigh(basis.T @ hessian @ basis + jnp.diag(jnp.where(null, 0.0, 2.0 * size)))
