@@ -366,10 +366,11 @@ def _definite(eigenvalues, size):
 def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits, last_held=None):
     """((Q, q, A, b, G, h), flat): the QP of one step at y for :func:`solve_qp`, and the
     flat directions of its Hessian (n, n) (the eigenvectors that got the floor; the
-    others zeroed; those of the whole Hessian, where the dependent rows split it). The QP: minimise the quadratic model of the Lagrangian subject to the
-    linearised rows and the box, each target row relaxed by two elastic slacks and each
-    limit row by one, costing DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of
-    limits), |d_i| <= radius. The quadratic term is the Hessian of the Lagrangian with its
+    others zeroed; those of the whole Hessian, where the dependent rows split it). The
+    QP: minimise the quadratic model of the Lagrangian subject to the linearised rows and
+    the box, each target row relaxed by two elastic slacks and each limit row by one,
+    costing DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits),
+    |d_i| <= radius. The quadratic term is the Hessian of the Lagrangian with its
     eigenvalues' moduli, those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except
     one above DESIGN_KEPT_CURVATURE, which stays (see there), and less the floor again
     along the gradients of the targets and of the ``held_limits`` (l,) (bool; None: none)
@@ -413,8 +414,9 @@ def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, ra
         # the cross terms between the null space and the rows' span are dropped (the rows'
         # linearisation fixes the step's part in their span)
         rows, fixed = last_held
-        vectors, null = _null_space(_active_matrix(jet, rows, fixed))
-        free, spanned = vectors * null, vectors * ~null  # (n, n) each, the other's columns zeroed
+        singular_vectors, null = _null_space(_active_matrix(jet, rows, fixed))
+        # (n, n) each, the other's columns zeroed
+        free, spanned = singular_vectors * null, singular_vectors * ~null
         dependent = (jnp.sum(rows) + jnp.sum(fixed) > jnp.sum(~null)) & jnp.any(null)
         dependent = dependent & (_violation(c, n_targets) <= DESIGN_DEPENDENT_MET)
         reduced_eigenvalues, reduced_vectors = jnp.linalg.eigh(free.T @ lagrangian @ free)
@@ -455,9 +457,10 @@ def _last_held(last: _Step, bound_multipliers):
 
 def _hessian_multipliers(jet, last: _Step, bound_multipliers, last_held):
     """(m,) the multipliers that weight the rows' Hessians in the next subproblem: the
-    ``last`` step's, those of its active rows (``last_held``, :func:`_last_held`) replaced by the least-norm ones that give
-    the same combination of gradients, with the bounds' (``bound_multipliers`` (2n,):
-    lower, then upper; the radius's, where it limits the step). Where active rows are
+    ``last`` step's, those of its active rows (``last_held``, :func:`_last_held`) replaced
+    by the least-norm ones that give the same combination of gradients, with the bounds'
+    (``bound_multipliers`` (2n,): lower, then upper; the radius's, where it limits the
+    step). Where active rows are
     dependent, the QP's multipliers lie anywhere in an unbounded set, and its
     interior-point method ends half way to the elastic price: at hs108's x9 = 0, where
     the limits x3 x9 and -x5 x9 (both at least 0) and the bound x9 at least 0 all have
