@@ -151,8 +151,10 @@ DESIGN_GRADIENT_FLOOR = 1e-6
 DESIGN_NULL_SPACE_RTOL = 1e-9
 # - the polish (a Newton root find on the KKT or feasibility equations) refines the
 #   search's point; a root further than this (scaled variables, box width 1) from it is
-#   another solution of the equations, or the far end of Newton's slow steps from a flat
-#   minimum (x^6's), and the search's point stands, judged by its own stationarity.
+#   another solution of the equations, and the search's point stands, judged by its own
+#   stationarity, unless (with an objective) the root meets the equations to the design's
+#   tolerance at an objective no higher (Newton's slow steps from a flat minimum, x^6's, or its
+#   exact step across an ill-conditioned one);
 DESIGN_POLISH_REACH = 1e-4
 
 

@@ -647,11 +647,12 @@ def _bend(jet, d, rows, fixed):
     return -jnp.linalg.pinv(matrix, rtol=DESIGN_NULL_SPACE_RTOL) @ jnp.concatenate([bent, jnp.zeros(d.shape[0])])
 
 
-def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_targets):
+def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_targets, face=None):
     """(e, v, w, u, wu): the least eigenvalue e of the Hessian of the Lagrangian on the
     null space of the strongly active constraints (targets, limits and bounds with a
-    positive multiplier), relative to the Hessian's largest eigenvalue modulus (plus 1;
-    about 2 where that null space is empty); the direction v (n,) to leave or probe the
+    positive multiplier; and the rows (m,) and variables (n,) of ``face``, a pair of masks
+    that :func:`_saddle_on_faces` holds too), relative to the Hessian's largest eigenvalue
+    modulus (plus 1; about 2 where that null space is empty); the direction v (n,) to leave or probe the
     point along: e's eigenvector where e is negative beyond DESIGN_CURVATURE_TOL, else a
     combination of all the eigenvectors whose curvature is at most
     DESIGN_FLAT_CURVATURE, weighted 1, 2, 3, ... (a probe along the least eigenvector
@@ -667,7 +668,10 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_ta
     strong = step.multipliers > DESIGN_ACTIVE_MULTIPLIER
     strong = strong.at[:n_targets].set(True)
     lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
-    vectors, null = _null_space(_active_matrix(jet, strong, lower | upper))
+    fixed = lower | upper
+    if face is not None:
+        strong, fixed = strong | face[0], fixed | face[1]
+    vectors, null = _null_space(_active_matrix(jet, strong, fixed))
     basis = vectors * null  # (n, n), columns outside the null space zeroed
     size = 1.0 + jnp.max(jnp.abs(jnp.linalg.eigvalsh(hessian)))
     # the zeroed columns get curvature 2 size, so that only the null space's count
@@ -681,8 +685,53 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_ta
     parallel = jnp.abs(jnp.dot(u, v)) >= _PARALLEL * jnp.linalg.norm(u) * jnp.linalg.norm(v)
     u = jnp.where(parallel, 0.0, u)
     # both corrections from one pseudo-inverse: under vmap it depends on neither direction
-    w, wu = jax.vmap(lambda d: _bend(jet, d, strong, lower | upper))(jnp.stack([v, u]))
+    w, wu = jax.vmap(lambda d: _bend(jet, d, strong, fixed))(jnp.stack([v, u]))
     return eigenvalues[0] / size, v, w, u, wu
+
+
+# The most weakly active rows and bounds whose faces :func:`_saddle_on_faces` goes through.
+_FACE_ROWS = 4
+
+
+def _saddle_on_faces(jet, step: _Step, bound_multipliers, weight, y, y_max, n_targets):
+    """(decided, found, e, v, w) for a stationary point whose direction of negative
+    curvature on the strongly active constraints' null space cannot leave it on either
+    side, first order, because weakly active limits or bounds (no multiplier) block it:
+    whether a direction of negative curvature leaves the point on the cone those
+    constraints leave, and one (:func:`_least_curvature`'s e, v, w). At (1, 0), a vertex of
+    min -(x^2 + y^2) on x + y <= 1 in the box [0, 1]^2, the QP gives x's upper bound the
+    whole multiplier: y is free on the null space, with curvature -2, but x + y <= 1 blocks
+    +y and y >= 0 blocks -y, and the vertex, a strict minimum, was called "not_a_minimum".
+
+    The least value of the curvature on that cone lies on one of its faces, where some of
+    the weak rows are held too, along the least eigenvector there; so each face's least
+    eigenvector, either way, is tried against every row (:func:`_room`,
+    :func:`_limits_room`). Faces of at most _FACE_ROWS weak rows and bounds are gone
+    through: with more, ``decided`` is False (and the point is taken for a saddle that
+    cannot be left, as before)."""
+    n, m = y.shape[0], step.multipliers.shape[0]
+    strong = (step.multipliers > DESIGN_ACTIVE_MULTIPLIER).at[:n_targets].set(True)
+    lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
+    weak_rows = jnp.concatenate([jnp.zeros(n_targets, bool), step.active_limits]) & ~strong
+    weak = jnp.concatenate([weak_rows, (step.at_lower & ~lower) | (step.at_upper & ~upper)])  # (m + n,)
+    k = min(_FACE_ROWS, m + n)
+    chosen = jnp.argsort(~weak, stable=True)[:k]  # the weak ones first
+    subsets = (np.arange(2**k)[:, None] >> np.arange(k)) & 1 == 1
+    faces = jnp.zeros((2**k, m + n), bool).at[:, chosen].set(subsets & weak[chosen])
+    e, v, w, _, _ = jax.vmap(
+        lambda face: _least_curvature(jet, step, bound_multipliers, weight, jnp.zeros(n), n_targets,
+                                      (face[:m], face[m:]))
+    )(faces)
+    v = jnp.where(faces[:, m:], 0.0, v)  # a held variable's rounding must not block its bound
+
+    def leaves(d):
+        return (_room(y, d, y_max) > 0.0) & (_limits_room(jet, d, n_targets) > 0.0)
+
+    ahead, back = jax.vmap(leaves)(v), jax.vmap(leaves)(-v)
+    found = (e < -DESIGN_CURVATURE_TOL) & (ahead | back)
+    first = jnp.argmax(found)
+    v = jnp.where(ahead[first], 1.0, -1.0) * v[first]
+    return jnp.sum(weak) <= _FACE_ROWS, jnp.any(found), e[first], v, w[first]
 
 
 def _room_along(slack, rate):
@@ -843,16 +892,34 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             (jet, step, bound_multipliers, state.weight, approach),
             (jnp.ones(()), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n)),
         )
-        # Leave a saddle downhill, or, where flat, towards the side with more room in the box
-        # and the limits, then in the box alone. At (0, 1), a vertex of min -(x^2 + 2 y^2) on
-        # x + y <= 1, y <= 1, whose limit holds with no multiplier, the box's room alone chose
-        # +x, across the limit; every escape failed and the point was called "not_a_minimum".
-        v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
-        box = jnp.stack([_room(y, v, y_max), _room(y, -v, y_max)])
-        held = jnp.minimum(box, jnp.stack([_limits_room(jet, v, n_targets), _limits_room(jet, -v, n_targets)]))
-        wider = (held[1] > held[0]) | ((held[1] == held[0]) & (box[1] > box[0]))
-        flip = (jnp.dot(gradient, v) == 0.0) & wider
-        v, room = jnp.where(flip, -v, v), jnp.where(flip, box[1], box[0])
+        def leaving(v):
+            """(v, its room in the box, the most room either way in the box and the limits):
+            leave a saddle downhill, or, where flat, towards the side with more room in the
+            box and the limits, then in the box alone. At (0, 1), a vertex of
+            min -(x^2 + 2 y^2) on x + y <= 1, y <= 1, whose limit holds with no multiplier,
+            the box's room alone chose +x, across the limit; every escape failed and the
+            point was called "not_a_minimum"."""
+            v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
+            box = jnp.stack([_room(y, v, y_max), _room(y, -v, y_max)])
+            held = jnp.minimum(box, jnp.stack([_limits_room(jet, v, n_targets), _limits_room(jet, -v, n_targets)]))
+            wider = (held[1] > held[0]) | ((held[1] == held[0]) & (box[1] > box[0]))
+            flip = (jnp.dot(gradient, v) == 0.0) & wider
+            return jnp.where(flip, -v, v), jnp.where(flip, box[1], box[0]), jnp.max(held)
+
+        v, room, most = leaving(v)
+        # Where weakly active rows block v both ways, the faces of the cone they leave say
+        # whether any direction of negative curvature leaves the point (_saddle_on_faces);
+        # where none does, the point is a minimum on that cone.
+        blocked = stationary & (curvature < -DESIGN_CURVATURE_TOL) & (most <= 0.0)
+        decided, found, face_curvature, face_v, face_w = where_needed(
+            blocked,
+            lambda operands: _saddle_on_faces(*operands, n_targets),
+            (jet, step, bound_multipliers, state.weight, y, y_max),
+            (jnp.asarray(False), jnp.asarray(False), curvature, v, w),
+        )
+        curvature = jnp.where(blocked & decided, jnp.where(found, face_curvature, 1.0), curvature)
+        v, room, _ = leaving(jnp.where(blocked & found, face_v, v))
+        w = jnp.where(blocked & found, face_w, w)
         saddle = stationary & (curvature < -DESIGN_CURVATURE_TOL)
         escape = saddle & (state.escapes < DESIGN_ESCAPES) & (room > 0.0)
         # A stationary point whose curvature is too small to tell a minimum (x^3 at 0, a
@@ -1274,23 +1341,38 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     # where the model is not finite at the polish's point, and where the polish breaks a
     # row that the search's point meets (in an experiment with another QP Hessian, Newton's
     # residual on the badly scaled hs106 stalled 1.9e-10 outside a limit that the search's
-    # point held to 6e-16: "limit_violated").
+    # point held to 6e-16: "limit_violated"). With an objective, a polish that went further
+    # stands where it met its equations to the design's tolerance at an objective no higher
+    # than the search's point's: on 1e10 (x + y - 1)^2 + (x - y - 0.2)^2 the search, whose
+    # objective (scaled to its gradient at the start) fell below rounding, stopped 0.04 from
+    # the minimum, and the polish's exact step there, 0.009 of a box width, was dropped.
+    near = jnp.max(jnp.abs(y - y_start)) <= DESIGN_POLISH_REACH
+    if problem.objective is not None:
+        near = near | ((residual <= tol) & (polished.v[0] <= search.jet.v[0]))
     kept = (
         usable
         & jnp.all((y >= -DESIGN_ON_CONSTRAINT) & (y <= y_max + DESIGN_ON_CONSTRAINT))
-        & (jnp.max(jnp.abs(y - y_start)) <= DESIGN_POLISH_REACH)
+        & near
         & (~jnp.any(_broken(c, n_targets, tol)) | jnp.any(_broken(search.jet.v[1:], n_targets, tol)))
     )
     y = jnp.where(kept, jnp.clip(y, 0.0, y_max), y_start)
     outputs = jnp.where(kept, outputs, search.jet.outputs)
     c = jnp.where(kept, c, search.jet.v[1:])
 
-    # Stationarity is a gradient condition: met to sqrt(rtol), as the optimum's value is;
-    # where the polish is not kept, at the search's point, which then stands (Newton from a
-    # degenerate minimum, x^6's, goes further than the polish may reach).
+    # Stationarity is a gradient condition: met to sqrt(rtol), as the optimum's value is, or
+    # to its own rounding (y's, through the Lagrangian's Hessian) where that is larger, as
+    # after a start on a plateau, whose small gradient scales the objective up: max
+    # exp(-(x - 1)^2) from x = -4 (gradient 3e-10) met it at x = 1 to 1.3e-5, with a Hessian
+    # of 3e11, and was called "max_steps_reached". Where the polish is not kept, at the
+    # search's point, which then stands.
     at_search = equations.rows(equations.unknowns(y_start, multipliers_start), search.jet)
     residual = jnp.where(kept, residual, jnp.max(jnp.abs(at_search), initial=0.0))
-    kkt_met = (residual <= jnp.sqrt(tol)) & (search.phase == CONVERGED)
+    rounding = jnp.zeros(())
+    if problem.objective is not None:
+        hessian = jnp.where(kept, _lagrangian_hessian(polished, multipliers, search.weight),
+                            _lagrangian_hessian(search.jet, multipliers_start, search.weight))
+        rounding = jnp.finfo(y.dtype).eps * (1.0 + jnp.max(jnp.abs(y))) * jnp.linalg.norm(hessian)
+    kkt_met = (residual <= jnp.maximum(jnp.sqrt(tol), rounding)) & (search.phase == CONVERGED)
     targets_broken, limits_broken = _broken(c, n_targets, tol)
     finite = jnp.all(jnp.isfinite(outputs)) & jnp.all(jnp.isfinite(y)) & (search.phase != NONFINITE_START)
     inner_failed = outputs[problem.outputs.index(problem.converged)] < 0.5 if problem.converged is not None else False

@@ -242,17 +242,88 @@ def test_a_degenerate_minimum_on_a_limit_is_found():
     assert result.outputs["f"] == pytest.approx(-1.0, abs=1e-12)
 
 
-def test_a_minimum_too_flat_for_the_polish_stands_at_the_searchs_point():
+def _concave_on_simplex(n, start):
+    names = "xyz"[:n]
+    return Problem(lambda v: {"f": -sum(v[k] ** 2 for k in names), "s": sum(v[k] for k in names)},
+                   [Variable(k, 0.0, 1.0, start=s) for k, s in zip(names, start)],
+                   limits=[Limit("s", upper=1.0)], objective=Objective("f", "min"))
+
+
+@pytest.mark.parametrize(
+    "n, start",
+    [(2, (1.0, 0.0)), (3, (1.0, 0.0, 0.0)), (3, (1 / 3, 1 / 3, 1 / 3))],
+    ids=["2d-from-the-vertex", "3d-from-a-vertex", "3d-from-the-centroid"],
+)
+def test_a_vertex_minimum_with_weakly_active_rows_is_a_minimum(n, start):
+    """min -|x|^2 on the simplex sum x <= 1, x in [0, 1]^n: on it |x|^2 <= (sum x)^2 <= 1,
+    with equality only at the unit vertices, which are the minima (f = -1); the centroid
+    is the maximum of f on the face sum x = 1. At a vertex more rows and bounds are active
+    than there are variables, and the QP may give one bound the whole multiplier: the
+    others' null space then holds directions of negative curvature that the weakly active
+    rows block both ways. The vertex was called "not_a_minimum"."""
+    result = solve(_concave_on_simplex(n, start))
+    assert result.status == "successful", (result.status, result.parameters)
+    x = sorted(result.parameters.values())
+    assert x[-1] == pytest.approx(1.0, abs=1e-12) and max(abs(v) for v in x[:-1]) <= 1e-12
+    assert result.outputs["f"] == pytest.approx(-1.0, abs=1e-12)
+
+
+def test_a_saddle_whose_weak_rows_block_one_direction_is_left_along_another():
+    """min -(x^2 + y^2 / 2) on the cone x + y <= 0, y - x <= 0 (y <= -|x|), [-1, 1]^2, from
+    its apex (0, 0): stationary (no gradient), both limits active with no multiplier,
+    and x, the direction of least curvature, blocked either way by one of them. Along
+    the cone's edges the curvature is negative too: the apex is a saddle, left along an
+    edge to a minimum, (+-1, -1), f = -1.5 (f >= -x^2 - y^2 / 2 >= -1 - 1/2 on the
+    feasible set). A check that held every weakly active row would call the apex a
+    minimum."""
+    problem = Problem(lambda v: {"f": -(v["x"] ** 2 + 0.5 * v["y"] ** 2), "a": v["x"] + v["y"], "b": v["y"] - v["x"]},
+                      [Variable("x", -1.0, 1.0, start=0.0), Variable("y", -1.0, 1.0, start=0.0)],
+                      limits=[Limit("a", upper=0.0, scale=1.0), Limit("b", upper=0.0, scale=1.0)],
+                      objective=Objective("f", "min"))
+    result = solve(problem)
+    assert result.status == "successful", (result.status, result.parameters)
+    assert abs(result.parameters["x"]) == pytest.approx(1.0, abs=1e-12)
+    assert result.parameters["y"] == pytest.approx(-1.0, abs=1e-12)
+    assert result.outputs["f"] == pytest.approx(-1.5, abs=1e-12)
+
+
+def test_a_minimum_too_flat_for_the_search_is_polished():
     """min x^6 on [-2, 2] from 1: the search stops where x^6's gradient is below its
     tolerance (x ~ 5e-3, f ~ 1e-14 of its value at the start), and Newton's steps from there
-    (each 4/5 of the last) go further than the polish may move, so the search's point
-    stands. It was "max_steps_reached" after 33 of 100 evaluations; its stationarity is met,
-    so it is a minimum to tolerance (its derivatives would be NaN; there are none here)."""
+    (each 4/5 of the last) go further than the polish's reach but to a lower objective,
+    meeting their equations: the polish stands. It was "max_steps_reached" after 33 of 100
+    evaluations, and then the search's point, before the polish could go that far."""
     problem = Problem(lambda v: {"f": v["x"] ** 6}, [Variable("x", -2.0, 2.0, start=1.0)],
                       objective=Objective("f", "min"))
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
-    assert abs(result.parameters["x"]) < 1e-2
+    assert abs(result.parameters["x"]) < 1e-3
+
+
+def test_an_ill_conditioned_minimum_is_polished_to_its_point():
+    """min 1e10 (x + y - 1)^2 + (x - y - 0.2)^2 on [-2, 2]^2: both squares vanish at
+    (0.6, 0.4), the minimum; its Hessian's condition number is 1e10. The objective, scaled
+    to its gradient at the start, fell below rounding 0.04 from the minimum, where the
+    search stopped, and the polish's exact Newton step there went further than its reach
+    and was dropped: "successful" at (0.5625, 0.4375)."""
+    problem = Problem(lambda v: {"f": 1e10 * (v["x"] + v["y"] - 1) ** 2 + (v["x"] - v["y"] - 0.2) ** 2},
+                      [Variable("x", -2.0, 2.0), Variable("y", -2.0, 2.0)], objective=Objective("f", "min"))
+    result = solve(problem)
+    assert result.status == "successful", (result.status, result.parameters)
+    assert result.parameters["x"] == pytest.approx(0.6, abs=1e-10)
+    assert result.parameters["y"] == pytest.approx(0.4, abs=1e-10)
+
+
+def test_a_maximum_reached_from_a_plateau_is_successful():
+    """max exp(-(x - 1)^2) on [-10, 10] from x = -4, where its gradient is 1e-10: the
+    maximum is x = 1. The objective's scale, 1 / its gradient at the start, makes its
+    Hessian there 3e11 (scaled variables), so that y's rounding alone leaves a
+    stationarity residual of 1e-5, above sqrt(rtol): it was "max_steps_reached" at x = 1."""
+    problem = Problem(lambda v: {"g": jnp.exp(-((v["x"] - 1.0) ** 2))}, [Variable("x", -10.0, 10.0, start=-4.0)],
+                      objective=Objective("g", "max"))
+    result = solve(problem)
+    assert result.status == "successful", (result.status, result.parameters)
+    assert result.parameters["x"] == pytest.approx(1.0, abs=1e-7)
 
 
 HS055_FROM_ITS_OTHER_MINIMUM = Published(
