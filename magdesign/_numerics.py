@@ -156,6 +156,10 @@ DESIGN_NULL_SPACE_RTOL = 1e-9
 #   tolerance at an objective no higher (Newton's slow steps from a flat minimum, x^6's, or its
 #   exact step across an ill-conditioned one);
 DESIGN_POLISH_REACH = 1e-4
+# - the implicit derivatives with respect to a target's value or a limit's bound exist
+#   where the linear system they solve has a solution: its residual at the least-squares
+#   answer within this (relative to the sizes of its two terms);
+DESIGN_SOLVABLE_RTOL = 1e-6
 
 
 # Width of the smoothed contact ramp, as a fraction of the length it is applied to (the

@@ -107,6 +107,7 @@ from magdesign._numerics import (
     DESIGN_POINT_SECONDS,
     DESIGN_POLISH_REACH,
     DESIGN_RTOL,
+    DESIGN_SOLVABLE_RTOL,
     DESIGN_START_NUDGE,
     TINY,
     safe_div,
@@ -696,24 +697,28 @@ _FACE_ROWS = 4
 def _saddle_on_faces(jet, step: _Step, bound_multipliers, weight, y, y_max, n_targets):
     """(decided, found, e, v, w) for a stationary point whose direction of negative
     curvature on the strongly active constraints' null space cannot leave it on either
-    side, first order, because weakly active limits or bounds (no multiplier) block it:
-    whether a direction of negative curvature leaves the point on the cone those
-    constraints leave, and one (:func:`_least_curvature`'s e, v, w). At (1, 0), a vertex of
-    min -(x^2 + y^2) on x + y <= 1 in the box [0, 1]^2, the QP gives x's upper bound the
-    whole multiplier: y is free on the null space, with curvature -2, but x + y <= 1 blocks
-    +y and y >= 0 blocks -y, and the vertex, a strict minimum, was called "not_a_minimum".
+    side, first order, because rows and bounds met with no multiplier (weakly active)
+    block it: whether some direction leaves the point on the cone those constraints leave
+    (``found``), and of those the one of least curvature (:func:`_least_curvature`'s e,
+    v, w; v signed to leave). At (1, 0), a vertex of min -(x^2 + y^2) on x + y <= 1 in the
+    box [0, 1]^2, the QP gives x's upper bound the whole multiplier: y is free on the null
+    space, with curvature -2, but x + y <= 1 blocks +y and y >= 0 blocks -y, and the
+    vertex, a strict minimum, was called "not_a_minimum".
 
-    The least value of the curvature on that cone lies on one of its faces, where some of
-    the weak rows are held too, along the least eigenvector there; so each face's least
-    eigenvector, either way, is tried against every row (:func:`_room`,
-    :func:`_limits_room`). Faces of at most _FACE_ROWS weak rows and bounds are gone
-    through: with more, ``decided`` is False (and the point is taken for a saddle that
-    cannot be left, as before)."""
+    The least curvature on that cone lies on one of its faces, where some of the weak rows
+    are held too, along the least eigenvector there; so each face's least eigenvector,
+    either way, is tried against every row and bound (:func:`_room`, :func:`_limits_room`).
+    Where one leaves with negative curvature the point is a saddle, where the least that
+    leaves is flat it is probed along it (-(y^2 + x^4) under y <= x^2 at 0: y blocked, x
+    flat, and f falls as -x^4), and where none leaves it is a minimum on the cone. Faces of
+    at most _FACE_ROWS weak rows and bounds are gone through: with more, ``decided`` is
+    False (where none is found, the point stays a saddle that cannot be left)."""
     n, m = y.shape[0], step.multipliers.shape[0]
     strong = (step.multipliers > DESIGN_ACTIVE_MULTIPLIER).at[:n_targets].set(True)
     lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
-    weak_rows = jnp.concatenate([jnp.zeros(n_targets, bool), step.active_limits]) & ~strong
-    weak = jnp.concatenate([weak_rows, (step.at_lower & ~lower) | (step.at_upper & ~upper)])  # (m + n,)
+    # met with no slack (as _room and _limits_room read them) and no multiplier
+    met = jnp.concatenate([jnp.zeros(n_targets, bool), jet.v[1 + n_targets :] >= 0.0])
+    weak = jnp.concatenate([met & ~strong, ((y <= 0.0) & ~lower) | ((y >= y_max) & ~upper)])  # (m + n,)
     k = min(_FACE_ROWS, m + n)
     chosen = jnp.argsort(~weak, stable=True)[:k]  # the weak ones first
     subsets = (np.arange(2**k)[:, None] >> np.arange(k)) & 1 == 1
@@ -722,16 +727,15 @@ def _saddle_on_faces(jet, step: _Step, bound_multipliers, weight, y, y_max, n_ta
         lambda face: _least_curvature(jet, step, bound_multipliers, weight, jnp.zeros(n), n_targets,
                                       (face[:m], face[m:]))
     )(faces)
-    v = jnp.where(faces[:, m:], 0.0, v)  # a held variable's rounding must not block its bound
+    v = jnp.where(faces[:, m:] | lower | upper, 0.0, v)  # a held variable's rounding must not block its bound
 
     def leaves(d):
         return (_room(y, d, y_max) > 0.0) & (_limits_room(jet, d, n_targets) > 0.0)
 
     ahead, back = jax.vmap(leaves)(v), jax.vmap(leaves)(-v)
-    found = (e < -DESIGN_CURVATURE_TOL) & (ahead | back)
-    first = jnp.argmax(found)
-    v = jnp.where(ahead[first], 1.0, -1.0) * v[first]
-    return jnp.sum(weak) <= _FACE_ROWS, jnp.any(found), e[first], v, w[first]
+    least = jnp.argmin(jnp.where(ahead | back, e, jnp.inf))
+    v = jnp.where(ahead[least], 1.0, -1.0) * v[least]
+    return jnp.sum(weak) <= _FACE_ROWS, ahead[least] | back[least], e[least], v, w[least]
 
 
 def _room_along(slack, rate):
@@ -907,9 +911,9 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             return jnp.where(flip, -v, v), jnp.where(flip, box[1], box[0]), jnp.max(held)
 
         v, room, most = leaving(v)
-        # Where weakly active rows block v both ways, the faces of the cone they leave say
-        # whether any direction of negative curvature leaves the point (_saddle_on_faces);
-        # where none does, the point is a minimum on that cone.
+        # Where weakly active rows block v both ways, the faces of the cone they leave give
+        # the least curvature of a direction that leaves the point, signed to leave
+        # (_saddle_on_faces); where none leaves, the point is a minimum on that cone.
         blocked = stationary & (curvature < -DESIGN_CURVATURE_TOL) & (most <= 0.0)
         decided, found, face_curvature, face_v, face_w = where_needed(
             blocked,
@@ -917,9 +921,10 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             (jet, step, bound_multipliers, state.weight, y, y_max),
             (jnp.asarray(False), jnp.asarray(False), curvature, v, w),
         )
-        curvature = jnp.where(blocked & decided, jnp.where(found, face_curvature, 1.0), curvature)
-        v, room, _ = leaving(jnp.where(blocked & found, face_v, v))
-        w = jnp.where(blocked & found, face_w, w)
+        on_face = blocked & found
+        curvature = jnp.where(on_face, face_curvature, jnp.where(blocked & decided, 1.0, curvature))
+        v, room = jnp.where(on_face, face_v, v), jnp.where(on_face, _room(y, face_v, y_max), room)
+        w = jnp.where(on_face, face_w, w)
         saddle = stationary & (curvature < -DESIGN_CURVATURE_TOL)
         escape = saddle & (state.escapes < DESIGN_ESCAPES) & (room > 0.0)
         # A stationary point whose curvature is too small to tell a minimum (x^3 at 0, a
@@ -1225,6 +1230,28 @@ def _implicit_derivatives(equations, z, jet, theta, usable):
     return jax.jacfwd(root_of)(theta)
 
 
+def _solvable(equations, z, jet, theta, dz):
+    """(p,) bool: whether the linear system that the implicit derivatives dz (len(z), p)
+    solve at the root z has a solution in each column of theta that is a target's value or
+    a limit's bound (the others: True). Held rows that are dependent (a limit whose two
+    bounds are equal, a limit given twice) leave none for a bound moved alone, and the
+    least-squares answer, which splits the move between the rows, is no derivative: a
+    pinned limit's two sides got 0.25 each where raising the upper one alone moves the
+    optimum by 0.5 (and lowering it leaves no design)."""
+    problem = equations.problem
+    n_rows = len(problem.targets) + len(problem.limit_rows)
+
+    def rows_at(bounds):
+        c, _ = _scaled_rows(problem, dict(zip(problem.outputs, jet.outputs)), theta.at[:n_rows].set(bounds))
+        return equations.rows(z, eqx.tree_at(lambda j: j.v, jet, jnp.concatenate([jet.v[:1], c])))
+
+    moved = jax.jacfwd(rows_at)(theta[:n_rows])  # (len(z), rows)
+    reached = jax.vmap(lambda d: equations.tangent(jet, z, d), in_axes=1, out_axes=1)(dz[:, :n_rows])
+    size = jnp.max(jnp.abs(moved), axis=0, initial=0.0) + jnp.max(jnp.abs(reached), axis=0, initial=0.0)
+    solvable = jnp.max(jnp.abs(reached + moved), axis=0, initial=0.0) <= DESIGN_SOLVABLE_RTOL * size
+    return jnp.concatenate([solvable, jnp.ones(theta.shape[0] - n_rows, bool)])
+
+
 def _given_root(inputs):
     return inputs[2], None
 
@@ -1334,7 +1361,11 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     multipliers = z[n:] if problem.objective is not None else jnp.zeros_like(multipliers_start)
     usable = jnp.isfinite(residual) & jnp.all(jnp.isfinite(z))
     usable = usable & jnp.all(jnp.stack([jnp.all(jnp.isfinite(leaf)) for leaf in jax.tree.leaves(polished)]))
-    dy = _implicit_derivatives(equations, z, polished, theta, usable)[:n] if theta.shape[0] else jnp.zeros((n, 0))
+    if theta.shape[0]:
+        dz = _implicit_derivatives(equations, z, polished, theta, usable)
+        dy = jnp.where(_solvable(equations, z, polished, theta, dz), dz[:n], jnp.nan)
+    else:
+        dy = jnp.zeros((n, 0))
     outputs, c = polished.outputs, polished.v[1:]
     # The polish refines the search's point; one that ends outside the box or far away
     # found another solution of the equations, and the search's point stands, as it does
@@ -1343,12 +1374,17 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     # residual on the badly scaled hs106 stalled 1.9e-10 outside a limit that the search's
     # point held to 6e-16: "limit_violated"). With an objective, a polish that went further
     # stands where it met its equations to the design's tolerance at an objective no higher
-    # than the search's point's: on 1e10 (x + y - 1)^2 + (x - y - 0.2)^2 the search, whose
-    # objective (scaled to its gradient at the start) fell below rounding, stopped 0.04 from
-    # the minimum, and the polish's exact step there, 0.009 of a box width, was dropped.
+    # than the search's point's, its held limits' and bounds' multipliers of the right sign
+    # (to sqrt(rtol)): on 1e10 (x + y - 1)^2 + (x - y - 0.2)^2 the search, whose objective
+    # (scaled to its gradient at the start) fell below rounding, stopped 0.04 from the
+    # minimum, and the polish's exact step there, 0.009 of a box width, was dropped.
     near = jnp.max(jnp.abs(y - y_start)) <= DESIGN_POLISH_REACH
     if problem.objective is not None:
-        near = near | ((residual <= tol) & (polished.v[0] <= search.jet.v[0]))
+        pull = search.weight * polished.J[0] + polished.J[1:].T @ multipliers  # a fixed variable's bound's multiplier
+        signed = jnp.all(jnp.where(equations.equations[n_targets:], multipliers[n_targets:], 0.0) >= -jnp.sqrt(tol))
+        signed = signed & jnp.all(jnp.where(active.at_lower, pull, 0.0) >= -jnp.sqrt(tol))
+        signed = signed & jnp.all(jnp.where(active.at_upper, pull, 0.0) <= jnp.sqrt(tol))
+        near = near | ((residual <= tol) & (polished.v[0] <= search.jet.v[0]) & signed)
     kept = (
         usable
         & jnp.all((y >= -DESIGN_ON_CONSTRAINT) & (y <= y_max + DESIGN_ON_CONSTRAINT))

@@ -287,12 +287,31 @@ def test_a_saddle_whose_weak_rows_block_one_direction_is_left_along_another():
     assert result.outputs["f"] == pytest.approx(-1.5, abs=1e-12)
 
 
+def test_a_flat_way_out_on_a_face_is_probed():
+    """min -(y^2 + x^4) + z^2 under y <= x^2, x in [-1, 1], y in [0, 1], z in [-1, 1], from
+    (0, 0, 0.3): the search comes to (0, 0, 0), where y's negative curvature is blocked by
+    the limit above and y's bound below, and the face along x is flat (f = -x^4 there).
+    No face leaves with negative curvature, but a flat one does, and the point is no
+    minimum: with y <= x^2 <= 1, f >= -2 x^4 >= -2, reached at (+-1, 1, 0). Taking the
+    point for a minimum once no face had negative curvature called it "successful" (a
+    review's counter-example)."""
+    problem = Problem(lambda v: {"f": -(v["y"] ** 2 + v["x"] ** 4) + v["z"] ** 2, "g": v["y"] - v["x"] ** 2},
+                      [Variable("x", -1.0, 1.0, start=0.0), Variable("y", 0.0, 1.0, start=0.0),
+                       Variable("z", -1.0, 1.0, start=0.3)],
+                      limits=[Limit("g", upper=0.0, scale=1.0)], objective=Objective("f", "min"))
+    result = solve(problem)
+    assert result.status == "successful", (result.status, result.parameters)
+    assert abs(result.parameters["x"]) == pytest.approx(1.0, abs=1e-12)
+    assert result.parameters["y"] == pytest.approx(1.0, abs=1e-12)
+    assert result.outputs["f"] == pytest.approx(-2.0, abs=1e-12)
+
+
 def test_a_minimum_too_flat_for_the_search_is_polished():
     """min x^6 on [-2, 2] from 1: the search stops where x^6's gradient is below its
-    tolerance (x ~ 5e-3, f ~ 1e-14 of its value at the start), and Newton's steps from there
-    (each 4/5 of the last) go further than the polish's reach but to a lower objective,
-    meeting their equations: the polish stands. It was "max_steps_reached" after 33 of 100
-    evaluations, and then the search's point, before the polish could go that far."""
+    tolerance (x ~ 5e-3, f ~ 1e-14 of its value at the start). Newton's steps from there,
+    each 4/5 of the last, go further than the polish's reach, to a lower objective, and
+    meet their equations: the polish's point stands (before, the search's did, and before
+    that the solve ended "max_steps_reached" after 33 of 100 evaluations)."""
     problem = Problem(lambda v: {"f": v["x"] ** 6}, [Variable("x", -2.0, 2.0, start=1.0)],
                       objective=Objective("f", "min"))
     result = solve(problem)
@@ -635,6 +654,31 @@ def test_a_derivative_that_does_not_exist_is_not_reported_as_zero():
     assert result.status == "successful"
     assert result.parameters["x"] == pytest.approx(1.0, rel=1e-12)
     assert not np.isfinite(result.derivatives["p"]["x"])
+
+
+@pytest.mark.parametrize("limits", [[Limit("g", lower=1.0, upper=1.0)], [Limit("g", upper=1.0), Limit("k", upper=1.0)]],
+                         ids=["pinned", "given-twice"])
+def test_derivatives_in_a_bound_of_dependent_rows_do_not_exist(limits):
+    """min (x - 2)^2 + (y - 1)^2 under x + y <= u, u = 1: the projection of (2, 1) onto the
+    line, x = (u + 1) / 2, y = (u - 1) / 2, so d(x, y)/du = (1/2, 1/2) with the limit given
+    once. Pinned (lower = upper = 1) or given twice (g and k both x + y <= 1), both rows are
+    held and dependent: moving one bound alone has no derivative (raising the upper side
+    of the pinned limit moves the optimum by u / 2, lowering it leaves no design; raising
+    one of the twins moves nothing, lowering it moves by u / 2). The least-squares answer
+    split it, 0.25 per side: NaN now, at the same optimum."""
+    def model(v):
+        return {"g": v["x"] + v["y"], "k": v["x"] + v["y"], "h": (v["x"] - 2) ** 2 + (v["y"] - 1) ** 2}
+
+    variables = [Variable("x", -3.0, 3.0), Variable("y", -3.0, 3.0)]
+    once = solve(Problem(model, variables, limits=[Limit("g", upper=1.0)], objective=Objective("h", "min")))
+    assert once.derivatives["g.upper"]["x"] == pytest.approx(0.5, rel=1e-9)
+    assert once.derivatives["g.upper"]["y"] == pytest.approx(0.5, rel=1e-9)
+    result = solve(Problem(model, variables, limits=limits, objective=Objective("h", "min")))
+    assert result.status == "successful", (result.status, result.parameters)
+    assert result.parameters["x"] == pytest.approx(1.0, abs=1e-12)
+    assert result.parameters["y"] == pytest.approx(0.0, abs=1e-12)
+    values = [value for row in result.derivatives.values() for value in row.values()]
+    assert values and all(math.isnan(value) for value in values)
 
 
 def test_feasibility_problem_with_a_curve_of_solutions():
