@@ -153,8 +153,8 @@ DESIGN_NULL_SPACE_RTOL = 1e-9
 #   search's point; a root further than this (scaled variables, box width 1) from it is
 #   another solution of the equations, and the search's point stands, judged by its own
 #   stationarity, unless (with an objective) the root meets the equations to the design's
-#   tolerance at an objective no higher (Newton's slow steps from a flat minimum, x^6's, or its
-#   exact step across an ill-conditioned one);
+#   tolerance at an objective no higher, its multipliers of the right sign (Newton's slow
+#   steps from a flat minimum, x^6's, or its exact step across an ill-conditioned one);
 DESIGN_POLISH_REACH = 1e-4
 # - the implicit derivatives with respect to a target's value or a limit's bound exist
 #   where the linear system they solve has a solution: its residual at the least-squares

@@ -461,12 +461,11 @@ def _hessian_multipliers(jet, last: _Step, bound_multipliers, last_held):
     ``last`` step's, those of its active rows (``last_held``, :func:`_last_held`) replaced
     by the least-norm ones that give the same combination of gradients, with the bounds'
     (``bound_multipliers`` (2n,): lower, then upper; the radius's, where it limits the
-    step). Where active rows are
-    dependent, the QP's multipliers lie anywhere in an unbounded set, and its
-    interior-point method ends half way to the elastic price: at hs108's x9 = 0, where
-    the limits x3 x9 and -x5 x9 (both at least 0) and the bound x9 at least 0 all have
-    gradients along x9, two multipliers of 4e5 and 6e5 whose Hessians' cross terms, made
-    definite, gave x3 and x5 curvatures of 1e6; steps of 3e-7 crawled to
+    step). Where active rows are dependent, the QP's multipliers lie anywhere in an
+    unbounded set, and its interior-point method ends half way to the elastic price: at
+    hs108's x9 = 0, where the limits x3 x9 and -x5 x9 (both at least 0) and the bound x9
+    at least 0 all have gradients along x9, two multipliers of 4e5 and 6e5 whose
+    Hessians' cross terms, made definite, gave x3 and x5 curvatures of 1e6; steps of 3e-7 crawled to
     "max_steps_reached" at a point far from stationary. A row priced at the elastic cost
     keeps its multiplier: the linearisation cannot meet it, and its multiplier is the
     price of its violation, not a share of a combination (min x with a target x^2 of -1/2,
@@ -648,15 +647,23 @@ def _bend(jet, d, rows, fixed):
     return -jnp.linalg.pinv(matrix, rtol=DESIGN_NULL_SPACE_RTOL) @ jnp.concatenate([bent, jnp.zeros(d.shape[0])])
 
 
+def _strongly_active(step: _Step, bound_multipliers, n_targets):
+    """((m,), (n,), (n,)) bool: the constraint rows that are strongly active at a step
+    (every target, and the limits with a positive multiplier), and the variables on their
+    lower and upper bounds with one."""
+    lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
+    return (step.multipliers > DESIGN_ACTIVE_MULTIPLIER).at[:n_targets].set(True), lower, upper
+
+
 def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_targets, face=None):
     """(e, v, w, u, wu): the least eigenvalue e of the Hessian of the Lagrangian on the
     null space of the strongly active constraints (targets, limits and bounds with a
     positive multiplier; and the rows (m,) and variables (n,) of ``face``, a pair of masks
-    that :func:`_saddle_on_faces` holds too), relative to the Hessian's largest eigenvalue
-    modulus (plus 1; about 2 where that null space is empty); the direction v (n,) to leave or probe the
-    point along: e's eigenvector where e is negative beyond DESIGN_CURVATURE_TOL, else a
-    combination of all the eigenvectors whose curvature is at most
-    DESIGN_FLAT_CURVATURE, weighted 1, 2, 3, ... (a probe along the least eigenvector
+    that :func:`_saddle_on_faces` holds too), relative to the Hessian's largest
+    eigenvalue modulus (plus 1; about 2 where that null space is empty); the direction v
+    (n,) to leave or probe the point along: e's eigenvector where e is negative beyond
+    DESIGN_CURVATURE_TOL, else a combination of all the eigenvectors whose curvature is at
+    most DESIGN_FLAT_CURVATURE, weighted 1, 2, 3, ... (a probe along the least eigenvector
     alone missed y^3 inside a disk beside a variable x that the objective ignores: it
     probed along x); the probe's second direction u (n,): the ``approach`` (the
     direction the steps came from where they came only linearly, else 0) on that null
@@ -666,9 +673,7 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_ta
     largest entry of 1; w and wu (n,) are their second-order corrections on those
     constraints (:func:`_bend`)."""
     hessian = _lagrangian_hessian(jet, step.multipliers, weight)
-    strong = step.multipliers > DESIGN_ACTIVE_MULTIPLIER
-    strong = strong.at[:n_targets].set(True)
-    lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
+    strong, lower, upper = _strongly_active(step, bound_multipliers, n_targets)
     fixed = lower | upper
     if face is not None:
         strong, fixed = strong | face[0], fixed | face[1]
@@ -714,8 +719,7 @@ def _saddle_on_faces(jet, step: _Step, bound_multipliers, weight, y, y_max, n_ta
     at most _FACE_ROWS weak rows and bounds are gone through: with more, ``decided`` is
     False (where none is found, the point stays a saddle that cannot be left)."""
     n, m = y.shape[0], step.multipliers.shape[0]
-    strong = (step.multipliers > DESIGN_ACTIVE_MULTIPLIER).at[:n_targets].set(True)
-    lower, upper = jnp.split(bound_multipliers > DESIGN_ACTIVE_MULTIPLIER, 2)
+    strong, lower, upper = _strongly_active(step, bound_multipliers, n_targets)
     # met with no slack (as _room and _limits_room read them) and no multiplier
     met = jnp.concatenate([jnp.zeros(n_targets, bool), jet.v[1 + n_targets :] >= 0.0])
     weak = jnp.concatenate([met & ~strong, ((y <= 0.0) & ~lower) | ((y >= y_max) & ~upper)])  # (m + n,)
@@ -1188,6 +1192,13 @@ class _Feasibility(eqx.Module):
         return y
 
 
+def _rows_in(problem, jet, theta):
+    """The model's :class:`Jet` ``jet`` with its rows read again from its outputs in theta
+    (targets' values and limits' bounds)."""
+    c, _ = _scaled_rows(problem, dict(zip(problem.outputs, jet.outputs)), theta)
+    return eqx.tree_at(lambda j: j.v, jet, jnp.concatenate([jet.v[:1], c]))
+
+
 def _in_theta(equations, z, jet, theta):
     """The model's :class:`Jet` ``jet`` at y = z[:n], with what the rows of ``equations``
     read of it as functions of theta, for derivatives in theta: without fixed inputs
@@ -1196,8 +1207,7 @@ def _in_theta(equations, z, jet, theta):
     so that their derivative in theta is a mixed second derivative) are evaluated again."""
     problem, n = equations.problem, len(equations.problem.variables)
     if not problem.fixed_names:
-        c, _ = _scaled_rows(problem, dict(zip(problem.outputs, jet.outputs)), theta)
-        return eqx.tree_at(lambda j: j.v, jet, jnp.concatenate([jet.v[:1], c]))
+        return _rows_in(problem, jet, theta)
     if problem.objective is None:  # the feasibility rows read the values alone
         v, outputs = _values(problem, z[:n], theta)
         return eqx.tree_at(lambda j: (j.v, j.outputs), jet, (v, outputs))
@@ -1241,11 +1251,9 @@ def _solvable(equations, z, jet, theta, dz):
     problem = equations.problem
     n_rows = len(problem.targets) + len(problem.limit_rows)
 
-    def rows_at(bounds):
-        c, _ = _scaled_rows(problem, dict(zip(problem.outputs, jet.outputs)), theta.at[:n_rows].set(bounds))
-        return equations.rows(z, eqx.tree_at(lambda j: j.v, jet, jnp.concatenate([jet.v[:1], c])))
-
-    moved = jax.jacfwd(rows_at)(theta[:n_rows])  # (len(z), rows)
+    moved = jax.jacfwd(lambda bounds: equations.rows(z, _rows_in(problem, jet, theta.at[:n_rows].set(bounds))))(
+        theta[:n_rows]
+    )  # (len(z), rows)
     reached = jax.vmap(lambda d: equations.tangent(jet, z, d), in_axes=1, out_axes=1)(dz[:, :n_rows])
     size = jnp.max(jnp.abs(moved), axis=0, initial=0.0) + jnp.max(jnp.abs(reached), axis=0, initial=0.0)
     solvable = jnp.max(jnp.abs(reached + moved), axis=0, initial=0.0) <= DESIGN_SOLVABLE_RTOL * size
