@@ -10,8 +10,8 @@ source.
 import argparse
 import json
 import math
-import re
 import pathlib
+import re
 import sys
 import time
 

@@ -1,7 +1,6 @@
 """Each study's test module names its study (NAME); the study runs once per module."""
 
 import pytest
-
 from study_runner import run_quick
 
 

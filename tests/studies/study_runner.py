@@ -26,8 +26,11 @@ def run_quick(name: str, out: pathlib.Path) -> dict:
 
 def published_cells(out: pathlib.Path) -> list[str]:
     """The 'published' cells of the report's first table, which must open the report."""
-    lines = [line for line in (out / "report.md").read_text().splitlines()[1:]
-             if line.strip() and not line.startswith("*Quick mode")]
+    lines = [
+        line
+        for line in (out / "report.md").read_text().splitlines()[1:]
+        if line.strip() and not line.startswith("*Quick mode")
+    ]
     assert lines[0] == "| quantity | published | source | magdesign | difference | why |"
     cells = []
     for line in lines[2:]:

@@ -1,10 +1,9 @@
-"""Seed 003's study in quick mode, checked against the paper's published numbers."""
+"""The GMR-inductor study in quick mode, checked against the paper's published numbers."""
 
 import pytest
-
 from study_runner import assert_opens_with
 
-NAME = "seed003_gmr_inductor"
+NAME = "gmr_inductor"
 DISPLACEMENT_ERROR = 0.05  # Sec. III-B, Figs. 8-9: "roughly 5 percent"
 DETECTION_RATE = 0.90  # Sec. III-C
 # every published number issue 12 lists for this sensor, as the first table prints it

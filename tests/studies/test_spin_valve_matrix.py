@@ -1,10 +1,9 @@
-"""Seed 002's study in quick mode: its headline numbers against the paper's."""
+"""The spin-valve matrix study in quick mode: its headline numbers against the paper's."""
 
 import pytest
-
 from study_runner import assert_opens_with
 
-NAME = "seed002_spin_valve_matrix"
+NAME = "spin_valve_matrix"
 MT, UT = 1e-3, 1e-6
 # every published number issue 12 lists for this sensor, as the first table prints it
 PUBLISHED = ["-0.7 .. +0.7 mT", "1.985 / 2.015 V", "1.985 .. 2.015 V", "+-200 um, +-10 deg"]
@@ -20,6 +19,11 @@ def test_spin_valve_voltages_as_published(results):
     assert results["voltage_at_plus_1mT"] == pytest.approx(2.015, abs=2.5e-3)
     # 14.1 mV/mT (Section 4.1); its own 0.72 %/mT x 2 kOhm x 1 mA is 2.1 % higher
     assert results["sensitivity"] == pytest.approx(14.1e-3 / MT, rel=0.03)
+    # the report's why: rounding of 0.72 does not explain the 2.1 % (0.715 .. 0.725 %/mT x 2 V is
+    # 14.3 .. 14.5 mV/mT, both above 14.1); the two agree at 14.1 / 0.72 = 1.9583 kOhm (by hand)
+    low, high = results["sensitivity_of_rounded_0_72"]
+    assert low == pytest.approx(14.3e-3 / MT, rel=1e-12) and high == pytest.approx(14.5e-3 / MT, rel=1e-12)
+    assert results["resistance_implied_by_published_sensitivities"] == pytest.approx(1958.33, rel=1e-5)
     # the press stays in the 1.985 .. 2.015 V operating range and under the ADC's 2.048 V
     assert 1.985 - 2.5e-3 <= results["voltage_min"] and results["voltage_max"] <= 2.015 + 2.5e-3
     assert results["adc_fraction"] < 1.0

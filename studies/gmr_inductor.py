@@ -1,4 +1,6 @@
-"""Seed 003: a disc magnet in a gel layer over four GMR elements and four chip inductors.
+"""The GMR-inductor sensor: a disc magnet in a gel layer over four GMR elements and four chip
+inductors, after "A Magnetic Type Tactile Sensor by GMR elements and inductors" (a robotics
+conference paper; docs/references.md), "the paper" below.
 
 1. The 3-D displacement inverse over the paper's calibration volume (+-2 mm in x, y,
    0..-4 mm in z, Sec. III-B): GMR readings are simulated with the example spec's effects
@@ -9,7 +11,7 @@
    A/D noise added, the 3-sigma rule on all four inductors (Sec. II-C), against the
    paper's 90 % detection rate and its false-alarm-free Fig. 13.
 
-    python studies/seed003_gmr_inductor.py [--quick] [--out DIR]
+    python studies/gmr_inductor.py [--quick] [--out DIR]
 """
 
 import pathlib
@@ -21,17 +23,18 @@ import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-
 from _report import Report, arguments, progress  # noqa: E402
+
 from magdesign.inverse import InverseStatus, displacement_grid, forward_readings, invert_displacement  # noqa: E402
 from magdesign.scene import Loads, scene_from_spec, simulate  # noqa: E402
 from magdesign.transducers import slip_flags  # noqa: E402
 from magdesign.units import parse  # noqa: E402
 
-NAME = "seed003_gmr_inductor"
+NAME = "gmr_inductor"
+PAPER = '"A Magnetic Type Tactile Sensor by GMR elements and inductors"'
 SPEC = pathlib.Path(__file__).resolve().parents[1] / "examples" / "gmr_inductor.toml"
 
-# Published (seed 003, /work/shared/seeds/003_*.txt)
+# Published (the GMR-inductor paper; its sections, equations and figures)
 DISPLACEMENT_ERROR = 0.05  # Sec. III-B on Figs. 8-9: "small errors of roughly 5 percent"
 DETECTION_RATE = 0.90  # Sec. III-C: "The detection rate was at 90 percent through repetitive experiments"
 REFERENCE_POINTS = 77  # Sec. III-B: 77 reference points (their layout is not given)
@@ -67,7 +70,7 @@ def loads_for(scene, displacement, time=None):
 
 
 def reference_point_inverse(readings, ref_points, ref_readings, gradients):
-    """Seed 003's Sec. II-B: the three reference points nearest in summed |dV| (Eq. 1), each
+    """The paper's Sec. II-B: the three reference points nearest in summed |dV| (Eq. 1), each
     linearised with its reading gradients (Eq. 2, four equations in three unknowns, solved
     in the least-squares sense), the three displacements averaged (step 6)."""
     distance = np.abs(readings[:, None, :] - ref_readings[None]).sum(-1)
@@ -79,9 +82,9 @@ def reference_point_inverse(readings, ref_points, ref_readings, gradients):
 def displacement_study(report, scene, noise, quick, key):
     rng = np.random.default_rng(3)
     per_plane = 12 if quick else 50
-    planes = np.concatenate([
-        np.column_stack([rng.uniform(-XY_RANGE, XY_RANGE, (per_plane, 2)), np.full(per_plane, z)]) for z in PLANES
-    ])
+    planes = np.concatenate(
+        [np.column_stack([rng.uniform(-XY_RANGE, XY_RANGE, (per_plane, 2)), np.full(per_plane, z)]) for z in PLANES]
+    )
     side = 5 if quick else 9
     xy, zs = np.linspace(-XY_RANGE, XY_RANGE, side), np.linspace(0.0, -Z_RANGE, side)
     volume = np.asarray(displacement_grid(xy, xy, zs))
@@ -94,7 +97,9 @@ def displacement_study(report, scene, noise, quick, key):
 
     progress("model-based inverse (compiles the forward chain's least squares; ~1 min at the exact level)")
     candidates = displacement_grid(*(np.linspace(-3e-3, 3e-3, CANDIDATES),) * 2, np.linspace(1e-3, -5e-3, CANDIDATES))
-    inversion = invert_displacement(scene, readings, noise=noise, resolution=RESOLUTION, candidates=candidates, starts=2)
+    inversion = invert_displacement(
+        scene, readings, noise=noise, resolution=RESOLUTION, candidates=candidates, starts=2
+    )
     model = np.asarray(inversion.displacement)
     statuses = {name: int(np.sum(inversion.status == getattr(InverseStatus, name))) for name in STATUSES}
 
@@ -110,9 +115,16 @@ def displacement_study(report, scene, noise, quick, key):
         return np.linalg.norm(estimate[rows] - truth[rows], axis=-1) / np.linalg.norm(truth[rows], axis=-1)
 
     rows = {z: np.flatnonzero(np.isclose(truth[: 2 * per_plane, 2], z)) for z in PLANES}
-    error = {(method, z): relative(estimate, rows[z]) for method, estimate in (("model", model), ("paper", paper)) for z in PLANES}
-    absolute = {method: np.linalg.norm(estimate[2 * per_plane:] - volume, axis=-1) for method, estimate in (("model", model), ("paper", paper))}
-    sigma = float(np.median(np.linalg.norm(np.asarray(inversion.uncertainty)[2 * per_plane:], axis=-1)))
+    error = {
+        (method, z): relative(estimate, rows[z])
+        for method, estimate in (("model", model), ("paper", paper))
+        for z in PLANES
+    }
+    absolute = {
+        method: np.linalg.norm(estimate[2 * per_plane :] - volume, axis=-1)
+        for method, estimate in (("model", model), ("paper", paper))
+    }
+    sigma = float(np.median(np.linalg.norm(np.asarray(inversion.uncertainty)[2 * per_plane :], axis=-1)))
 
     for (method, z), values in error.items():
         tag = f"{method}_z{abs(z) * 1e3:.0f}mm"
@@ -126,8 +138,16 @@ def displacement_study(report, scene, noise, quick, key):
     report.result("inverse_status_counts", statuses)
     report.result("inverse_uncertainty_median", sigma)
     report.result("reference_points", len(ref_points))
-    return dict(error=error, absolute=absolute, statuses=statuses, volume=volume, per_plane=per_plane,
-                ref_axes=ref_axes, side=side, sigma=sigma)
+    return dict(
+        error=error,
+        absolute=absolute,
+        statuses=statuses,
+        volume=volume,
+        per_plane=per_plane,
+        ref_axes=ref_axes,
+        side=side,
+        sigma=sigma,
+    )
 
 
 def slip_events(quick, rng):
@@ -142,7 +162,7 @@ def slip_events(quick, rng):
     # three population slips open the record (drawn in Fig. 13 style), the rest shuffled after them
     first = len(AMPLITUDES) * len(RELEASE_TIMES) * repeats
     rest = [i for i in range(len(events)) if not first <= i < first + 3]
-    return events[first:first + 3] + [events[i] for i in rng.permutation(rest)]
+    return events[first : first + 3] + [events[i] for i in rng.permutation(rest)]
 
 
 def slip_series(events, rng):
@@ -203,7 +223,8 @@ def slip_study(report, scene, noise, quick, key):
     small = population & (amplitude < 2 * SMALL_SLIP)
     rate = {
         (d, t): detected[(group == "speed") & (amplitude == d) & (release == t)].mean()
-        for d in AMPLITUDES for t in RELEASE_TIMES
+        for d in AMPLITUDES
+        for t in RELEASE_TIMES
     }
     by_angle = {a: detected[(group == "angle") & np.isclose(angle, np.radians(a))].mean() for a in ANGLES_DEG}
     # the slowest slip speed (d / release time) still detected 90 % of the time, per amplitude
@@ -214,7 +235,7 @@ def slip_study(report, scene, noise, quick, key):
         threshold[d] = float(speeds[ok].min()) if ok.any() else float("nan")
     # the weakest of the four inductors' peak |EMF| during each release, its smallest over the population
     clean = np.asarray(simulate(scene, loads, without=("noise",)).extras["inductor_emf"])
-    weakest = [np.abs(clean[a - 1:b + 2]).max(axis=0).min() for a, b in spans[population]]
+    weakest = [np.abs(clean[a - 1 : b + 2]).max(axis=0).min() for a, b in spans[population]]
 
     report.result("slip_events", len(events))
     report.result("slip_record_seconds", float(time[-1]))
@@ -224,13 +245,31 @@ def slip_study(report, scene, noise, quick, key):
     report.result("slip_false_alarms_per_minute", false_alarms / minutes)
     report.result("slip_single_inductor_detection_rate", [float(s[0][population].mean()) for s in single])
     report.result("slip_single_inductor_false_alarms_per_minute", [s[1] / minutes for s in single])
-    report.result("slip_detection_rate_by_speed", {f"{d * 1e3:g}mm_{t * 1e3:g}ms": float(r) for (d, t), r in rate.items()})
+    report.result(
+        "slip_detection_rate_by_speed", {f"{d * 1e3:g}mm_{t * 1e3:g}ms": float(r) for (d, t), r in rate.items()}
+    )
     report.result("slip_detection_rate_by_angle", {f"{a:g}deg": float(r) for a, r in by_angle.items()})
     report.result("slip_speed_for_90_percent", {f"{d * 1e3:g}mm": v for d, v in threshold.items()})
     report.result("inductor_noise", float(scene.inductors.noise))
-    return dict(time=time, u=u, output=output, flags=np.asarray(flags), spans=spans, events=events,
-                detected=detected, false_alarms=false_alarms, single=single, minutes=minutes, rate=rate,
-                by_angle=by_angle, threshold=threshold, population=population, small=small, weakest=min(weakest), window=window)
+    return dict(
+        time=time,
+        u=u,
+        output=output,
+        flags=np.asarray(flags),
+        spans=spans,
+        events=events,
+        detected=detected,
+        false_alarms=false_alarms,
+        single=single,
+        minutes=minutes,
+        rate=rate,
+        by_angle=by_angle,
+        threshold=threshold,
+        population=population,
+        small=small,
+        weakest=min(weakest),
+        window=window,
+    )
 
 
 def percent(x):
@@ -239,7 +278,9 @@ def percent(x):
 
 def main(argv=None):
     args = arguments(NAME, argv, __doc__)
-    report = Report(NAME, "Seed 003: GMR displacement inverse and inductor slip detection", args.out, args.quick)
+    report = Report(
+        NAME, f"GMR-inductor sensor: displacement inverse and slip detection ({PAPER})", args.out, args.quick
+    )
     scene, noise, spec = load_scene(args.quick)
     fidelity = spec["magnet"].get("fidelity", "exact")
     key_gmr, key_slip = jax.random.split(jax.random.key(3))
@@ -258,61 +299,83 @@ def main(argv=None):
     rows = []
     for z, figure in zip(PLANES, ("Fig. 8", "Fig. 9")):
         model, paper = d["error"][("model", z)], d["error"][("paper", z)]
-        rows.append(dict(
-            quantity=f"displacement error, z = {abs(z) * 1e3:.0f} mm plane, magdesign inverse",
-            published="roughly 5 %", source=f"Sec. III-B, {figure}",
-            magdesign=f"median {percent(np.median(model))}, 95th pct {percent(np.percentile(model, 95))}",
-            difference=f"{100 * (np.median(model) - DISPLACEMENT_ERROR):+.2f} points (median)",
-            why=model_why,
-        ))
-        rows.append(dict(
-            quantity=f"displacement error, z = {abs(z) * 1e3:.0f} mm plane, the paper's reference-point method on the same readings",
-            published="roughly 5 %", source=f"Sec. II-B Eqs. 1-2, Sec. III-B, {figure}",
-            magdesign=f"median {percent(np.median(paper))}, 95th pct {percent(np.percentile(paper, 95))}",
-            difference=f"{100 * (np.median(paper) - DISPLACEMENT_ERROR):+.2f} points (median)",
-            why=f"the same noise plus the method's interpolation error between {references} reference points "
+        rows.append(
+            dict(
+                quantity=f"displacement error, z = {abs(z) * 1e3:.0f} mm plane, magdesign inverse",
+                published="roughly 5 %",
+                source=f"Sec. III-B, {figure}",
+                magdesign=f"median {percent(np.median(model))}, 95th pct {percent(np.percentile(model, 95))}",
+                difference=f"{100 * (np.median(model) - DISPLACEMENT_ERROR):+.2f} points (median)",
+                why=model_why,
+            )
+        )
+        rows.append(
+            dict(
+                quantity=f"displacement error, z = {abs(z) * 1e3:.0f} mm plane, the paper's reference-point method on the same readings",
+                published="roughly 5 %",
+                source=f"Sec. II-B Eqs. 1-2, Sec. III-B, {figure}",
+                magdesign=f"median {percent(np.median(paper))}, 95th pct {percent(np.percentile(paper, 95))}",
+                difference=f"{100 * (np.median(paper) - DISPLACEMENT_ERROR):+.2f} points (median)",
+                why=f"the same noise plus the method's interpolation error between {references} reference points "
                 f"{step_xy * 1e3:g} mm (x, y) and {step_z * 1e3:g} mm (z) apart (the paper's {REFERENCE_POINTS} "
                 "points' layout is not published); the bench effects above are absent. So the method itself "
                 "accounts for only this much of the paper's 5 %: the rest is the bench's",
-        ))
+            )
+        )
     pop = s["detected"][s["population"]]
-    rows.append(dict(
-        quantity="slip detection rate, 3 sigma on all four inductors",
-        published="90 %", source="Sec. III-C",
-        magdesign=f"{percent(pop.mean())} of {pop.size} slips ({SMALL_SLIP * 1e3:g}-{AMPLITUDES[-1] * 1e3:g} mm along x, "
-                  f"released in {FAST_RELEASE[0] * 1e3:g}-{FAST_RELEASE[1] * 1e3:g} ms)",
-        difference=f"{100 * (pop.mean() - DETECTION_RATE):+.1f} points",
-        why="event model: the paper gives no slip sizes or speeds beyond Fig. 13; misses here come from noise alone, "
+    rows.append(
+        dict(
+            quantity="slip detection rate, 3 sigma on all four inductors",
+            published="90 %",
+            source="Sec. III-C",
+            magdesign=f"{percent(pop.mean())} of {pop.size} slips ({SMALL_SLIP * 1e3:g}-{AMPLITUDES[-1] * 1e3:g} mm along x, "
+            f"released in {FAST_RELEASE[0] * 1e3:g}-{FAST_RELEASE[1] * 1e3:g} ms)",
+            difference=f"{100 * (pop.mean() - DETECTION_RATE):+.1f} points",
+            why="event model: the paper gives no slip sizes or speeds beyond Fig. 13; misses here come from noise alone, "
             f"and in these fast slips every inductor peaks at {s['weakest'] * 1e3:.0f} mV or more against "
             f"{noise * 1e3:g} mV of noise. The rate falls below 90 % for slower slips "
             f"(below {s['threshold'][SMALL_SLIP] * 1e3:.3g} mm/s for 0.1 mm slips, table below) and for slips along a "
             f"diagonal of the inductor square (45 deg: {percent(s['by_angle'][45.0])}, table below)",
-    ))
+        )
+    )
     small = s["detected"][s["small"]]
-    rows.append(dict(
-        quantity="smallest slip of Fig. 13 (0.1 mm) detected",
-        published="detected", source="Sec. III-C, Fig. 13",
-        magdesign=(f"{percent(small.mean())} of {small.size} slips of {SMALL_SLIP * 1e3:g}-{2 * SMALL_SLIP * 1e3:g} mm"
-                   if small.size else "no such event drawn"),
-        difference="none" if small.size and small.mean() == 1.0 else f"{percent(1 - small.mean())} missed" if small.size else "-",
-        why=("as published" if small.size and small.mean() == 1.0 else "not all detected")
+    rows.append(
+        dict(
+            quantity="smallest slip of Fig. 13 (0.1 mm) detected",
+            published="detected",
+            source="Sec. III-C, Fig. 13",
+            magdesign=(
+                f"{percent(small.mean())} of {small.size} slips of {SMALL_SLIP * 1e3:g}-{2 * SMALL_SLIP * 1e3:g} mm"
+                if small.size
+                else "no such event drawn"
+            ),
+            difference="none"
+            if small.size and small.mean() == 1.0
+            else f"{percent(1 - small.mean())} missed"
+            if small.size
+            else "-",
+            why=("as published" if small.size and small.mean() == 1.0 else "not all detected")
             + ": the event model as above (fast releases)",
-    ))
+        )
+    )
     per_sample = np.mean([x[1] for x in s["single"]]) / len(s["time"])
-    rows.append(dict(
-        quantity="false alarms of the all-four rule",
-        published="none (slips flagged only at the three slip moments)", source="Sec. III-C, Fig. 13",
-        magdesign=f"{s['false_alarms']} in {s['minutes']:.1f} min",
-        difference=f"{s['false_alarms']}",
-        why=f"{'as published' if s['false_alarms'] == 0 else 'not as published'}: one inductor alone leaves its band "
+    rows.append(
+        dict(
+            quantity="false alarms of the all-four rule",
+            published="none (slips flagged only at the three slip moments)",
+            source="Sec. III-C, Fig. 13",
+            magdesign=f"{s['false_alarms']} in {s['minutes']:.1f} min",
+            difference=f"{s['false_alarms']}",
+            why=f"{'as published' if s['false_alarms'] == 0 else 'not as published'}: one inductor alone leaves its band "
             f"on noise at {per_sample:.2g} of the samples (run starts), "
-            f"four independent ones together at about its 4th power, {per_sample ** 4:.0e} (Gaussian A/D noise; "
+            f"four independent ones together at about its 4th power, {per_sample**4:.0e} (Gaussian A/D noise; "
             "vibration of the bench is not modelled)",
-    ))
+        )
+    )
     report.comparison(rows)
 
     report.text(
-        f"Scene: `examples/gmr_inductor.toml` (field fidelity **{fidelity}**). Seed 003 gives neither the gel's "
+        f"Scene: `examples/gmr_inductor.toml` (field fidelity **{fidelity}**). The paper gives neither the gel's "
         f"thickness nor the coordinates of Fig. 4, so the magnet height ({spec['geometry']['gap']} over the substrate), "
         f"the GMRs' positions ({', '.join('(' + ', '.join(q[:2]) + ')' for q in spec['sensor']['positions'])}) and the "
         f"inductors' ({', '.join('(' + ', '.join(q[:2]) + ')' for q in spec['inductors']['positions'])}) are the "
@@ -339,13 +402,28 @@ def main(argv=None):
     table = []
     for (method, z), values in d["error"].items():
         label = "magdesign inverse" if method == "model" else "paper's method"
-        table.append([label, f"{z * 1e3:g}", percent(np.median(values)), percent(np.percentile(values, 95)), percent(values.max())])
+        table.append(
+            [
+                label,
+                f"{z * 1e3:g}",
+                percent(np.median(values)),
+                percent(np.percentile(values, 95)),
+                percent(values.max()),
+            ]
+        )
     report.table(["method", "plane z (mm)", "median", "95th percentile", "max"], table)
     report.text("Absolute error over the whole volume grid (um):")
     report.table(
         ["method", "median", "95th percentile", "max"],
-        [["magdesign inverse" if m == "model" else "paper's method", np.median(v) * 1e6, np.percentile(v, 95) * 1e6,
-          v.max() * 1e6] for m, v in d["absolute"].items()],
+        [
+            [
+                "magdesign inverse" if m == "model" else "paper's method",
+                np.median(v) * 1e6,
+                np.percentile(v, 95) * 1e6,
+                v.max() * 1e6,
+            ]
+            for m, v in d["absolute"].items()
+        ],
     )
     on_reference = np.isclose(d["volume"][:, 2][:, None], d["ref_axes"][2][None]).any(axis=1)
     on_planes, between = d["absolute"]["paper"][on_reference], d["absolute"]["paper"][~on_reference]
@@ -358,8 +436,12 @@ def main(argv=None):
         f"the grid its median error is {np.median(on_planes) * 1e6:.1f} um on the reference planes and "
         f"{np.median(between) * 1e6:.1f} um between them."
     )
-    report.figure(inverse_figure(d), "inverse.png", "Left: relative error on the Fig. 8 and Fig. 9 planes, both methods. "
-                  "Right: absolute error over the volume grid against depth.")
+    report.figure(
+        inverse_figure(d),
+        "inverse.png",
+        "Left: relative error on the Fig. 8 and Fig. 9 planes, both methods. "
+        "Right: absolute error over the volume grid against depth.",
+    )
 
     report.heading("2. Slip detection by the inductors")
     report.text(
@@ -378,18 +460,26 @@ def main(argv=None):
     )
     report.text("Detection rate against the slip's speed (along x):")
     report.table(
-        ["release time (ms)"] + [f"d = {d_ * 1e3:g} mm: speed (mm/s)" for d_ in AMPLITUDES] + [f"d = {d_ * 1e3:g} mm: rate" for d_ in AMPLITUDES],
-        [[t * 1e3] + [d_ / t * 1e3 for d_ in AMPLITUDES] + [percent(s["rate"][(d_, t)]) for d_ in AMPLITUDES] for t in RELEASE_TIMES],
+        ["release time (ms)"]
+        + [f"d = {d_ * 1e3:g} mm: speed (mm/s)" for d_ in AMPLITUDES]
+        + [f"d = {d_ * 1e3:g} mm: rate" for d_ in AMPLITUDES],
+        [
+            [t * 1e3] + [d_ / t * 1e3 for d_ in AMPLITUDES] + [percent(s["rate"][(d_, t)]) for d_ in AMPLITUDES]
+            for t in RELEASE_TIMES
+        ],
     )
     thresholds = list(s["threshold"].values())
     same = max(thresholds) <= 2.5 * min(thresholds)  # within one step of the release-time grid
     report.text(
         "The slowest slip detected at least 90 % of the time moves at "
         + ", ".join(f"{v * 1e3:.3g} mm/s for d = {d_ * 1e3:g} mm" for d_, v in s["threshold"].items())
-        + (". The threshold is a speed, not a size: the EMF is proportional to the rate of change of flux. "
-           "Slips released over tens of milliseconds would therefore give misses like the bench's 10 %; "
-           "Fig. 13 does not show how fast its slips were released." if same else
-           ". The two thresholds differ by more than one step of the release-time grid.")
+        + (
+            ". The threshold is a speed, not a size: the EMF is proportional to the rate of change of flux. "
+            "Slips released over tens of milliseconds would therefore give misses like the bench's 10 %; "
+            "Fig. 13 does not show how fast its slips were released."
+            if same
+            else ". The two thresholds differ by more than one step of the release-time grid."
+        )
     )
     report.text("Detection rate against the slip's direction (d = 0.3 mm released in 2 ms):")
     report.table(["angle from x (deg)", "rate"], [[a, percent(r)] for a, r in s["by_angle"].items()])
@@ -410,8 +500,12 @@ def main(argv=None):
         + f" false alarms per minute; the all-four rule raises {s['false_alarms']} in the whole record: why the "
         "paper requires all four (Sec. III-C, 'robustness to partial slips')."
     )
-    report.figure(slip_figure(s), "slip.png", "Top: a stretch of the record (magnet shear displacement, four inductor "
-                  "outputs, all-four flags) as in Fig. 13. Bottom: detection rate against slip speed and direction.")
+    report.figure(
+        slip_figure(s),
+        "slip.png",
+        "Top: a stretch of the record (magnet shear displacement, four inductor "
+        "outputs, all-four flags) as in Fig. 13. Bottom: detection rate against slip speed and direction.",
+    )
     report.result("field_fidelity", fidelity)
     report.write()
 
@@ -427,8 +521,13 @@ def inverse_figure(d):
     left.legend(fontsize=8)
     depth = -d["volume"][:, 2] * 1e3
     for method, marker in (("model", "o"), ("paper", "x")):
-        right.scatter(depth, d["absolute"][method] * 1e6, s=8, marker=marker,
-                      label="magdesign inverse" if method == "model" else "paper's method")
+        right.scatter(
+            depth,
+            d["absolute"][method] * 1e6,
+            s=8,
+            marker=marker,
+            label="magdesign inverse" if method == "model" else "paper's method",
+        )
     right.set(yscale="log", xlabel="depth -z (mm)", ylabel="|error| (um)")
     right.legend(fontsize=8)
     return fig

@@ -1,8 +1,10 @@
-"""Seed 000: the magnetic-suspension tactile sensor (a Ni-Fe pole in a 4 mm ball over a
-magnet plate) at magdesign's method-of-moments level, beside the reduced level and the
-thesis's FEM numbers.
+"""The magnetic-suspension tactile sensor (a Ni-Fe pole in a 4 mm ball over a magnet plate)
+at magdesign's method-of-moments level, beside the reduced level and the FEM numbers of
+T. R. binti Sajat, "Basic study on tactile sensor by using magnetic suspension", master's
+thesis, Wakayama University (2008) (docs/references.md), "the thesis" below.
 
-The scene is examples/pole_plate.toml (PoleScene, PHYSICS.md 1.3) at its own level,
+The scene is examples/pole_plate.toml (PoleScene, a soft-magnetic pole over a magnet plate) at
+its own level,
 "moments" (the rod a linear soft body of mu_r 1000 split into cuboid cells, solved
 self-consistently in the plate's field; forces from the co-energy); a copy of the spec at
 pole.fidelity = "reduced" (the charge model, N_d = 0.1) is the cheap level. At both levels
@@ -10,12 +12,12 @@ the study computes the restoring force against tilt (+-60 deg), its linear range
 spring coefficient (a central difference over +-0.1 mrad of the exact restoring force), the
 field sensitivities like for like (the thesis's Hall pair, B_z at +-0.5 mm over a 10 deg
 turn; the example's GMR, B_x at 0.5 mm) and the plate's pull, and sets them beside the
-thesis's (seeds/000). It then checks, with numbers, candidate explanations of the gap in
+thesis's. It then checks, with numbers, candidate explanations of the gap in
 the spring coefficient (units, weight, pole and plate size, the initial model's design
 rule). Full mode adds a finer tilt grid, the convergence in the number of cells (8 ... 32;
 the finest is the reference), the library's own outputs and a planar (2-D) model.
 
-    python studies/seed000_suspension.py [--quick] [--out DIR]
+    python studies/magnetic_suspension.py [--quick] [--out DIR]
 """
 
 import copy
@@ -28,8 +30,8 @@ import jax
 import jax.numpy as jnp
 import matplotlib.pyplot as plt
 import numpy as np
-
 from _report import Report, arguments, progress
+
 from magdesign._numerics import TILT_DIFFERENCE_ANGLES, TILT_DIFFERENCE_STEP, TILT_SECOND_DIFFERENCE
 from magdesign.fields import cuboid, soft
 from magdesign.scene import loads_from_spec, outputs, parameters, scene_from_spec, with_parameters
@@ -38,10 +40,10 @@ from magdesign.units import MU0, deg, mm, mT
 
 uN = 1e-6
 
-NAME = "seed000_suspension"
+NAME = "magnetic_suspension"
 SPEC = pathlib.Path(__file__).resolve().parents[1] / "examples" / "pole_plate.toml"
 
-# Published, seed 000 (master thesis, "magnetic suspension" tactile sensor).
+# Published in the thesis (Sajat 2008; its chapters, sections, figures and tables).
 LINEAR_RANGE = 40 * deg  # abstract; Sec. 3.2.2, Fig. 3.5: "linear within the range of +-40 degrees"
 # Table 3.1, spring coefficient k. Its unit is lost in the text; read as uN/deg, the unit of
 # the initial model's 12.57 uN at 10 deg (Sec. 3.1.1) and of the 1 uN aim (Ch. 5), which over
@@ -72,8 +74,13 @@ GRAVITY = 9.81  # m/s^2
 # The initial model (Sec. 2.2, 3.1.1, Fig. 2.2): Fe (mu_r 300) through a 5.5 mm ball, 0.8 mm
 # above a "pole type" magnet whose size is lost: a 1.2 mm rod (the prototype's core, Sec. 4.1),
 # magnets 2 mm tall of the rod's, a 2 mm and the ball's diameter.
-INITIAL = {"pole.ball_radius": 2.75 * mm, "pole.length": 5.5 * mm, "geometry.gap": 0.8 * mm,
-           "pole.permeability": 300.0, "magnet.height": 2 * mm}
+INITIAL = {
+    "pole.ball_radius": 2.75 * mm,
+    "pole.length": 5.5 * mm,
+    "geometry.gap": 0.8 * mm,
+    "pole.permeability": 300.0,
+    "magnet.height": 2 * mm,
+}
 INITIAL_MAGNET_RADII = (0.6 * mm, 1.0 * mm, 2.75 * mm)
 PLATE_RADII = tuple(r * mm for r in (2.5, 5, 10, 20, 40))  # the plate's size is lost (Sec. 3.2.1)
 POLE_DIAMETERS = tuple(d * mm for d in (0.15, 0.3, 0.6, 1.2))  # the analysed pole was thinner than 1.2 mm (Sec. 4.2)
@@ -84,8 +91,14 @@ PLANAR_GRID = (4, 24, 16)  # its cells across, along the depth, along the rod
 # along its axis at the plate's Hc) over a Ni-Fe soleplate of the magnet plate's size (assumed).
 SOLEPLATE_CELLS = 20  # along the soleplate's diameter (2 through its 1 mm)
 # Readings of Table 3.1's lost unit: (label, SI value of one unit, a torque per ball radius?)
-UNIT_READINGS = (("uN/deg", uN / deg, False), ("uN/rad", uN, False), ("mN/deg", 1e-3 / deg, False),
-                 ("mN/rad", 1e-3, False), ("uN m/deg (torque)", uN / deg, True), ("mN m/rad (torque)", 1e-3, True))
+UNIT_READINGS = (
+    ("uN/deg", uN / deg, False),
+    ("uN/rad", uN, False),
+    ("mN/deg", 1e-3 / deg, False),
+    ("mN/rad", 1e-3, False),
+    ("uN m/deg (torque)", uN / deg, True),
+    ("mN m/rad (torque)", 1e-3, True),
+)
 
 # Tolerances (the thesis states none). A level is asked to agree with the FEM in order,
 # within a factor 2; "linear" means within 10 % of k theta; the GMR preset is exact.
@@ -131,8 +144,12 @@ def soleplate(p, lengths):
     plate's radius and thickness, top face at z = 0). The co-energy of the plate in the rod's
     field gives k = -W''(0) / r_b (five-point differences, as the library's pole); the Hall
     pair at +-HALL_X_NIFE reads the rod's and the plate's B_z."""
-    plate = soft.soft_body("cylinder", [2 * p["magnet.radius"], p["magnet.height"]], cells=SOLEPLATE_CELLS,
-                           permeability=p["pole.permeability"])
+    plate = soft.soft_body(
+        "cylinder",
+        [2 * p["magnet.radius"], p["magnet.height"]],
+        cells=SOLEPLATE_CELLS,
+        permeability=p["pole.permeability"],
+    )
     below = jnp.array([0.0, 0.0, -0.5]) * p["magnet.height"]
     ball = jnp.array([0.0, 0.0, p["geometry.gap"] + p["pole.ball_radius"]])
     probes = jnp.array([[HALL_X_NIFE, 0.0, HALL_HEIGHT], [-HALL_X_NIFE, 0.0, HALL_HEIGHT]])
@@ -143,8 +160,14 @@ def soleplate(p, lengths):
         centre = tip + 0.5 * length * rotation(angles)[2]
 
         def rod(points):
-            return posed_cylinder(points, centre=centre, angles=angles, radius=p["pole.diameter"] / 2, height=length,
-                                  polarization=p["magnet.remanence"])
+            return posed_cylinder(
+                points,
+                centre=centre,
+                angles=angles,
+                radius=p["pole.diameter"] / 2,
+                height=length,
+                polarization=p["magnet.remanence"],
+            )
 
         external = rod(below + plate.centres)
         magnetization = soft.magnetization(plate, external)
@@ -159,9 +182,12 @@ def soleplate(p, lengths):
     for name, length in lengths.items():
         energy, bz, peak = (np.asarray(a) for a in sweep(thetas, length))
         pair = bz[:, 0] - bz[:, 1]
-        results[name] = {"spring_coefficient": -float(second @ energy[:5]) / p["pole.ball_radius"],
-                         "hall_pair_sensitivity": float(pair[5] - pair[2]) / SENS_SPAN, "peak_polarization": float(peak.max()),
-                         "cells": len(plate.index)}
+        results[name] = {
+            "spring_coefficient": -float(second @ energy[:5]) / p["pole.ball_radius"],
+            "hall_pair_sensitivity": float(pair[5] - pair[2]) / SENS_SPAN,
+            "peak_polarization": float(peak.max()),
+            "cells": len(plate.index),
+        }
     return results
 
 
@@ -187,14 +213,23 @@ def linear_range(thetas, force, k, tolerance=LINEARITY):
 
 def stiffness(scene, grid):
     """The force sweep over ``grid`` (rad) with k, F at 1 and 10 deg, the pull and mu0 |M|."""
-    force, attraction, peak = (np.asarray(a) for a in forces(scene, jnp.asarray(np.concatenate([grid, [SECANT, -SECANT]]))))
+    force, attraction, peak = (
+        np.asarray(a) for a in forces(scene, jnp.asarray(np.concatenate([grid, [SECANT, -SECANT]])))
+    )
     n = grid.size
     k = float(force[n] - force[n + 1]) / (2 * SECANT)
     at = lambda angle: float(np.interp(angle, grid, force[:n]))  # noqa: E731
-    return {"spring_coefficient": k, "restoring_force": force[:n], "force_at_1deg": at(AIM_ANGLE),
-            "force_at_10deg": at(INITIAL_ANGLE), "force_ratio_at_40deg": at(LINEAR_RANGE) / (k * LINEAR_RANGE),
-            "linear_range": linear_range(grid, force[:n], k), "peak_angle": float(grid[grid > 0][np.argmax(force[:n][grid > 0])]),
-            "attraction": float(attraction), "peak_polarization": float(peak)}
+    return {
+        "spring_coefficient": k,
+        "restoring_force": force[:n],
+        "force_at_1deg": at(AIM_ANGLE),
+        "force_at_10deg": at(INITIAL_ANGLE),
+        "force_ratio_at_40deg": at(LINEAR_RANGE) / (k * LINEAR_RANGE),
+        "linear_range": linear_range(grid, force[:n], k),
+        "peak_angle": float(grid[grid > 0][np.argmax(force[:n][grid > 0])]),
+        "attraction": float(attraction),
+        "peak_polarization": float(peak),
+    }
 
 
 def measure(scene, grid, line):
@@ -204,15 +239,20 @@ def measure(scene, grid, line):
     start = time.perf_counter()
     out = stiffness(scene, grid)
     p = parameters(scene)
-    probes = np.array([[HALL_X, 0, HALL_HEIGHT], [-HALL_X, 0, HALL_HEIGHT], [float(p["sensor.offset"]), 0, float(p["sensor.height"])]])
+    probes = np.array(
+        [[HALL_X, 0, HALL_HEIGHT], [-HALL_X, 0, HALL_HEIGHT], [float(p["sensor.offset"]), 0, float(p["sensor.height"])]]
+    )
     tilts = np.concatenate([[0.0, SENS_SPAN, SECANT, -SECANT], np.array(LINE_ANGLES[2:]) * deg])
     field = np.asarray(fields(scene, jnp.asarray(tilts), jnp.asarray(np.concatenate([probes, line]))))
     pair = field[:, 0, 2] - field[:, 1, 2]
-    out.update(hall_pair_sensitivity=(pair[1] - pair[0]) / SENS_SPAN,
-               hall_single_sensitivity=(field[1, 0, 2] - field[0, 0, 2]) / SENS_SPAN,
-               gmr_field_sensitivity=(field[2, 2, 0] - field[3, 2, 0]) / (2 * SECANT),
-               line=field[[0, 1, 4, 5], 3:, 2], cells=len(scene.rod.index) if scene.fidelity == "moments" else 0,
-               seconds=time.perf_counter() - start)
+    out.update(
+        hall_pair_sensitivity=(pair[1] - pair[0]) / SENS_SPAN,
+        hall_single_sensitivity=(field[1, 0, 2] - field[0, 0, 2]) / SENS_SPAN,
+        gmr_field_sensitivity=(field[2, 2, 0] - field[3, 2, 0]) / (2 * SECANT),
+        line=field[[0, 1, 4, 5], 3:, 2],
+        cells=len(scene.rod.index) if scene.fidelity == "moments" else 0,
+        seconds=time.perf_counter() - start,
+    )
     return out
 
 
@@ -223,8 +263,12 @@ def planar_stiffness(p, depths):
 
     @jax.jit
     def restoring(theta, depth):
-        body = soft.soft_body("cuboid", jnp.stack([p["pole.diameter"], depth, p["pole.length"]]), cells=PLANAR_GRID,
-                              permeability=p["pole.permeability"])
+        body = soft.soft_body(
+            "cuboid",
+            jnp.stack([p["pole.diameter"], depth, p["pole.length"]]),
+            cells=PLANAR_GRID,
+            permeability=p["pole.permeability"],
+        )
         plate = jnp.stack([2 * p["magnet.radius"], depth + 2 * p["magnet.radius"], p["magnet.height"]])
         radius = p["pole.ball_radius"]
 
@@ -232,8 +276,15 @@ def planar_stiffness(p, depths):
             c, s = jnp.cos(angle), jnp.sin(angle)
             turn = jnp.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])  # body z to the rod's axis
             tip = jnp.array([radius * s, 0.0, p["geometry.gap"] + radius * (1 - c)])
-            points = tip + 0.5 * p["pole.length"] * turn[:, 2] + body.centres @ turn.T + jnp.array([0.0, 0.0, 0.5]) * plate[2]
-            external = cuboid(points, dimension=plate, polarization=jnp.array([0.0, 0.0, 1.0]) * p["magnet.remanence"]) @ turn
+            points = (
+                tip
+                + 0.5 * p["pole.length"] * turn[:, 2]
+                + body.centres @ turn.T
+                + jnp.array([0.0, 0.0, 0.5]) * plate[2]
+            )
+            external = (
+                cuboid(points, dimension=plate, polarization=jnp.array([0.0, 0.0, 1.0]) * p["magnet.remanence"]) @ turn
+            )
             return soft.coenergy(body, external)
 
         return -jax.grad(coenergy)(theta) / radius
@@ -245,14 +296,26 @@ def planar_stiffness(p, depths):
 def row(key, quantity, published, source, magdesign, difference, within, why):
     """A comparison row; ``within`` None for a number the model cannot compute."""
     verdict = "" if within is None else (" (within tolerance)" if within else " (outside tolerance)")
-    return {"key": key, "within": within, "quantity": quantity, "published": published, "source": source,
-            "magdesign": magdesign, "difference": difference + verdict, "why": why}
+    return {
+        "key": key,
+        "within": within,
+        "quantity": quantity,
+        "published": published,
+        "source": source,
+        "magdesign": magdesign,
+        "difference": difference + verdict,
+        "why": why,
+    }
 
 
 def main(argv=None):
     args = arguments(NAME, argv, description=__doc__.splitlines()[0])
-    report = Report(NAME, "Seed 000: magnetic suspension, method-of-moments and reduced levels against the thesis",
-                    args.out, args.quick)
+    report = Report(
+        NAME,
+        "Magnetic suspension: method-of-moments and reduced levels against the thesis (Sajat 2008)",
+        args.out,
+        args.quick,
+    )
     with open(SPEC, "rb") as file:
         spec = tomllib.load(file)
     reduced_spec = copy.deepcopy(spec)
@@ -283,8 +346,11 @@ def main(argv=None):
     by_diameter = [variant({"pole.diameter": d}) for d in POLE_DIAMETERS]
     progress(f"the rods that pass Ni-Fe's {NIFE_SATURATION:g} T, again with its saturation")
     saturating = build({**spec, "pole": {**spec["pole"], "saturation": f"{NIFE_SATURATION} T"}})
-    saturated = {d: spring_at_rest(with_parameters(saturating, {"pole.diameter": d}))
-                 for d, v in zip(POLE_DIAMETERS, by_diameter) if v["peak_polarization"] > NIFE_SATURATION}
+    saturated = {
+        d: spring_at_rest(with_parameters(saturating, {"pole.diameter": d}))
+        for d, v in zip(POLE_DIAMETERS, by_diameter)
+        if v["peak_polarization"] > NIFE_SATURATION
+    }
     by_plate = [variant({"magnet.radius": r}) for r in PLATE_RADII]
     initial = [variant({**INITIAL, "magnet.radius": r}) for r in INITIAL_MAGNET_RADII]
     progress("variants done")
@@ -322,100 +388,193 @@ def main(argv=None):
     readings = []
     for label, unit, torque in UNIT_READINGS:
         published = 0.068 * unit / (p["pole.ball_radius"] if torque else 1.0)
-        readings.append({"reading": label, "published": published, "moments_ratio": k / published, "reduced_ratio": k_red / published,
-                         "aim_tilt": AIM_FORCE / published})
+        readings.append(
+            {
+                "reading": label,
+                "published": published,
+                "moments_ratio": k / published,
+                "reduced_ratio": k_red / published,
+                "aim_tilt": AIM_FORCE / published,
+            }
+        )
     closest = min(readings, key=lambda r: abs(np.log(r["moments_ratio"])))
     pull_per_k = moments["attraction"] / k
     saturates = [d for d, v in zip(POLE_DIAMETERS, by_diameter) if v["peak_polarization"] > NIFE_SATURATION]
-    slope = np.log(by_diameter[1]["spring_coefficient"] / by_diameter[0]["spring_coefficient"]) / np.log(POLE_DIAMETERS[1] / POLE_DIAMETERS[0])
-    far = np.log(by_plate[-1]["spring_coefficient"] / by_plate[-2]["spring_coefficient"]) / np.log(PLATE_RADII[-1] / PLATE_RADII[-2])
+    slope = np.log(by_diameter[1]["spring_coefficient"] / by_diameter[0]["spring_coefficient"]) / np.log(
+        POLE_DIAMETERS[1] / POLE_DIAMETERS[0]
+    )
+    far = np.log(by_plate[-1]["spring_coefficient"] / by_plate[-2]["spring_coefficient"]) / np.log(
+        PLATE_RADII[-1] / PLATE_RADII[-2]
+    )
     needed = PLATE_RADII[-1] * (K_PM_FULL / by_plate[-1]["spring_coefficient"]) ** (1 / far)
     # each candidate's closest approach to Table 3.1 (as uN/deg) or to the initial model's force
     # the thinner poles' k, with Ni-Fe's saturation where the linear rod passes it
     thin = min(saturated.get(d, (v["spring_coefficient"],))[0] for d, v in zip(POLE_DIAMETERS, by_diameter))
-    best = {"a thinner pole (with saturation)": thin / K_PM_FULL,
-            "a wider plate": min(v["spring_coefficient"] for v in by_plate) / K_PM_FULL,
-            "the initial model's 12.57 uN": min(v["force_at_10deg"] for v in initial) / INITIAL_FORCE}
+    best = {
+        "a thinner pole (with saturation)": thin / K_PM_FULL,
+        "a wider plate": min(v["spring_coefficient"] for v in by_plate) / K_PM_FULL,
+        "the initial model's 12.57 uN": min(v["force_at_10deg"] for v in initial) / INITIAL_FORCE,
+    }
     if not args.quick:
         best["a planar model, 1 mm deep"] = planar * 1e-3 / K_PM_FULL
     closes = [name for name, value in best.items() if inside(value, 1.0)]
     checked = "; ".join(f"{name} x{value:.3g}" for name, value in best.items())
     # the GMR preset's reading per A/m of H along its axis, at rest (its own linear law)
     gmr_gain = float(jax.jacfwd(lambda b: scene.transduce(b)[0, 0, 0])(jnp.zeros((1, 1, 3)))[0, 0, 0]) * MU0
-    soleplate_note = (f"Condition 1 as read here (Sec. 2.2, 'vice versa'): the pole a magnet rod of the Ni-Fe rod's size, "
-                      f"magnetised along its axis at Hc = 200 kA/m, over a Ni-Fe soleplate (mu_r {p['pole.permeability']:g}) of "
-                      f"the magnet plate's size; both sizes assumed, the plate's cells "
-                      f"{nife['full']['cells']} ({SOLEPLATE_CELLS} across, coarse), largest mu0 M in it "
-                      f"{nife['full']['peak_polarization']:.2g} T (below Ni-Fe's {NIFE_SATURATION:g} T)")
+    soleplate_note = (
+        f"Condition 1 as read here (Sec. 2.2, 'vice versa'): the pole a magnet rod of the Ni-Fe rod's size, "
+        f"magnetised along its axis at Hc = 200 kA/m, over a Ni-Fe soleplate (mu_r {p['pole.permeability']:g}) of "
+        f"the magnet plate's size; both sizes assumed, the plate's cells "
+        f"{nife['full']['cells']} ({SOLEPLATE_CELLS} across, coarse), largest mu0 M in it "
+        f"{nife['full']['peak_polarization']:.2g} T (below Ni-Fe's {NIFE_SATURATION:g} T)"
+    )
     rows = [
-        row("linear_range", "linear range of F(theta), magnet soleplate, full pole", "+-40 deg", "abstract; Sec. 3.2.2, Fig. 3.5",
+        row(
+            "linear_range",
+            "linear range of F(theta), magnet soleplate, full pole",
+            "+-40 deg",
+            "abstract; Sec. 3.2.2, Fig. 3.5",
             f"moments: +-{moments['linear_range'] / deg:.1f} deg within {LINEARITY:.0%} of k theta, F peaks at "
             f"+-{moments['peak_angle'] / deg:.0f} deg, F(40 deg) = {moments['force_ratio_at_40deg']:.2f} k 40 deg; reduced: "
             f"+-{charge['linear_range'] / deg:.1f} deg, peak +-{charge['peak_angle'] / deg:.0f} deg",
-            f"{(moments['linear_range'] - LINEAR_RANGE) / deg:+.1f} deg", abs(moments["linear_range"] - LINEAR_RANGE) <= RANGE_TOLERANCE,
+            f"{(moments['linear_range'] - LINEAR_RANGE) / deg:+.1f} deg",
+            abs(moments["linear_range"] - LINEAR_RANGE) <= RANGE_TOLERANCE,
             f"tolerance +-{RANGE_TOLERANCE / deg:g} deg. The thesis states no criterion for 'linear' (within 30 % of k theta "
             f"the moments level holds to +-{linear_range(grid, moments['restoring_force'], k, 0.3) / deg:.0f} deg). Both levels bend "
             f"over alike: at 40 deg the tip has swung {p['pole.ball_radius'] * np.sin(LINEAR_RANGE) / mm:.2g} mm sideways and risen "
             f"{p['pole.ball_radius'] * (1 - np.cos(LINEAR_RANGE)) / mm:.2g} mm (the gap is {p['geometry.gap'] / mm:g} mm) into a "
-            f"weaker field"),
-        row("k_pm_full", "spring coefficient k, magnet soleplate, full pole (Model 2)", "0.068 uN/deg (unit read as uN/deg)",
-            "Table 3.1; Sec. 3.2.2", f"moments: {per_deg(k)}; reduced: {per_deg(k_red)}", f"{ratio(k, K_PM_FULL)} (reduced {ratio(k_red, K_PM_FULL)})",
+            f"weaker field",
+        ),
+        row(
+            "k_pm_full",
+            "spring coefficient k, magnet soleplate, full pole (Model 2)",
+            "0.068 uN/deg (unit read as uN/deg)",
+            "Table 3.1; Sec. 3.2.2",
+            f"moments: {per_deg(k)}; reduced: {per_deg(k_red)}",
+            f"{ratio(k, K_PM_FULL)} (reduced {ratio(k_red, K_PM_FULL)})",
             inside(k, K_PM_FULL),
             f"known gap; tolerance x{FACTOR:g}. Candidates checked below, at their closest: {checked}; "
             f"{', '.join(closes) or 'none'} within x{FACTOR:g}. The table's unit is lost: read as {closest['reading']} it is "
-            f"x{closest['moments_ratio']:.3g}. The rod: {cells_note}, mu_r {p['pole.permeability']:g}"),
-        row("k_pm_half", "spring coefficient k, magnet soleplate, half pole (Model 1)", "0.215 uN/deg", "Table 3.1",
+            f"x{closest['moments_ratio']:.3g}. The rod: {cells_note}, mu_r {p['pole.permeability']:g}",
+        ),
+        row(
+            "k_pm_half",
+            "spring coefficient k, magnet soleplate, half pole (Model 1)",
+            "0.215 uN/deg",
+            "Table 3.1",
             f"moments: {per_deg(half['spring_coefficient'])} (rod from the tip to the ball's centre)",
-            ratio(half["spring_coefficient"], K_PM_HALF), inside(half["spring_coefficient"], K_PM_HALF),
-            "known gap, as the full pole; the half pole's shape (Fig. 2.3a) is not in the text"),
-        row("k_half_over_full", "k(half) / k(full), magnet soleplate", f"{K_PM_HALF / K_PM_FULL:.3g}", "Table 3.1",
-            f"{half['spring_coefficient'] / k:.3g}", ratio(half["spring_coefficient"] / k, K_PM_HALF / K_PM_FULL),
+            ratio(half["spring_coefficient"], K_PM_HALF),
+            inside(half["spring_coefficient"], K_PM_HALF),
+            "known gap, as the full pole; the half pole's shape (Fig. 2.3a) is not in the text",
+        ),
+        row(
+            "k_half_over_full",
+            "k(half) / k(full), magnet soleplate",
+            f"{K_PM_HALF / K_PM_FULL:.3g}",
+            "Table 3.1",
+            f"{half['spring_coefficient'] / k:.3g}",
+            ratio(half["spring_coefficient"] / k, K_PM_HALF / K_PM_FULL),
             inside(half["spring_coefficient"] / k, K_PM_HALF / K_PM_FULL),
             f"tolerance x{FACTOR:g}. Here the half pole is a rod from the tip to the ball's centre, half the full rod's "
-            "volume; the thesis's half pole (Fig. 2.3a) is lost in the text and may differ in section too"),
-        row("sensitivity_pm", "sensitivity, magnet soleplate, Hall pair at +-0.5 mm, 0.1 mm above the plate", "0.3 mT/deg",
-            "abstract; Sec. 3.2.4, Fig. 3.9", f"moments: {sens(moments['hall_pair_sensitivity'])} (B_z pair over 0..10 deg), one chip "
+            "volume; the thesis's half pole (Fig. 2.3a) is lost in the text and may differ in section too",
+        ),
+        row(
+            "sensitivity_pm",
+            "sensitivity, magnet soleplate, Hall pair at +-0.5 mm, 0.1 mm above the plate",
+            "0.3 mT/deg",
+            "abstract; Sec. 3.2.4, Fig. 3.9",
+            f"moments: {sens(moments['hall_pair_sensitivity'])} (B_z pair over 0..10 deg), one chip "
             f"{sens(moments['hall_single_sensitivity'])}; reduced: {sens(charge['hall_pair_sensitivity'])}",
             f"{ratio(abs(moments['hall_pair_sensitivity']), SENS_PM)} (reduced {ratio(abs(charge['hall_pair_sensitivity']), SENS_PM)})",
             inside(moments["hall_pair_sensitivity"], SENS_PM),
             f"known gap; tolerance x{FACTOR:g}. Like k it rests on the plate's and the pole's sizes, both lost "
-            "(assumptions below)"),
-        row("gmr_field", "GMR in-plane sensitivity, B_x 0.1 mm above the plate", "as the Hall pair's (0.3 mT/deg), offset lost",
-            "Sec. 3.2.5, Fig. 3.10; Ch. 5", f"moments: {sens(moments['gmr_field_sensitivity'])} at {p['sensor.offset'] / mm:g} mm; "
-            f"reduced: {sens(charge['gmr_field_sensitivity'])}", f"{ratio(abs(moments['gmr_field_sensitivity']), SENS_PM)} (offset lost)",
-            None, "the thesis gives the GMR's best offset and value only in a lost figure; it says it equals the Hall pair's"),
-        row("sensitivity_nife", "sensitivity, Ni-Fe soleplate (condition 1), Hall pair at +-1 mm", "2 mT/deg",
-            "abstract; Sec. 3.2.4, Fig. 3.9", f"moments: {sens(nife['full']['hall_pair_sensitivity'])} (B_z pair over 0..10 deg)",
-            ratio(abs(nife["full"]["hall_pair_sensitivity"]), SENS_NIFE), inside(abs(nife["full"]["hall_pair_sensitivity"]), SENS_NIFE),
-            f"tolerance x{FACTOR:g}. {soleplate_note}"),
-        row("k_nife", "spring coefficient k, Ni-Fe soleplate (condition 1), half / full pole", "0.639 / 0.215 uN/deg", "Table 3.1",
+            "(assumptions below)",
+        ),
+        row(
+            "gmr_field",
+            "GMR in-plane sensitivity, B_x 0.1 mm above the plate",
+            "as the Hall pair's (0.3 mT/deg), offset lost",
+            "Sec. 3.2.5, Fig. 3.10; Ch. 5",
+            f"moments: {sens(moments['gmr_field_sensitivity'])} at {p['sensor.offset'] / mm:g} mm; "
+            f"reduced: {sens(charge['gmr_field_sensitivity'])}",
+            f"{ratio(abs(moments['gmr_field_sensitivity']), SENS_PM)} (offset lost)",
+            None,
+            "the thesis gives the GMR's best offset and value only in a lost figure; it says it equals the Hall pair's",
+        ),
+        row(
+            "sensitivity_nife",
+            "sensitivity, Ni-Fe soleplate (condition 1), Hall pair at +-1 mm",
+            "2 mT/deg",
+            "abstract; Sec. 3.2.4, Fig. 3.9",
+            f"moments: {sens(nife['full']['hall_pair_sensitivity'])} (B_z pair over 0..10 deg)",
+            ratio(abs(nife["full"]["hall_pair_sensitivity"]), SENS_NIFE),
+            inside(abs(nife["full"]["hall_pair_sensitivity"]), SENS_NIFE),
+            f"tolerance x{FACTOR:g}. {soleplate_note}",
+        ),
+        row(
+            "k_nife",
+            "spring coefficient k, Ni-Fe soleplate (condition 1), half / full pole",
+            "0.639 / 0.215 uN/deg",
+            "Table 3.1",
             f"moments: {per_deg(nife['half']['spring_coefficient'])} / {per_deg(nife['full']['spring_coefficient'])}",
             f"{ratio(nife['half']['spring_coefficient'], K_NIFE_HALF)} / {ratio(nife['full']['spring_coefficient'], K_NIFE_FULL)}",
             inside(nife["full"]["spring_coefficient"], K_NIFE_FULL),
             "known gap, as the magnet soleplate's (the table's unit is lost); the ratio below has no unit. Condition 1 as "
-            "in the row above"),
-        row("k_nife_over_pm", "k(Ni-Fe soleplate) / k(magnet soleplate), full pole", f"{K_NIFE_FULL / K_PM_FULL:.3g}", "Table 3.1",
-            f"{nife['full']['spring_coefficient'] / k:.3g}", ratio(nife["full"]["spring_coefficient"] / k, K_NIFE_FULL / K_PM_FULL),
+            "in the row above",
+        ),
+        row(
+            "k_nife_over_pm",
+            "k(Ni-Fe soleplate) / k(magnet soleplate), full pole",
+            f"{K_NIFE_FULL / K_PM_FULL:.3g}",
+            "Table 3.1",
+            f"{nife['full']['spring_coefficient'] / k:.3g}",
+            ratio(nife["full"]["spring_coefficient"] / k, K_NIFE_FULL / K_PM_FULL),
             inside(nife["full"]["spring_coefficient"] / k, K_NIFE_FULL / K_PM_FULL),
-            f"tolerance x{FACTOR:g}; free of Table 3.1's lost unit, and of Hc (both k scale as Hc^2). Condition 1 as above"),
-        row("sensitivity_nife_over_pm", "sensitivity, Ni-Fe soleplate (+-1 mm) / magnet soleplate (+-0.5 mm)",
-            f"{SENS_NIFE / SENS_PM:.3g}", "abstract; Sec. 3.2.4",
+            f"tolerance x{FACTOR:g}; free of Table 3.1's lost unit, and of Hc (both k scale as Hc^2). Condition 1 as above",
+        ),
+        row(
+            "sensitivity_nife_over_pm",
+            "sensitivity, Ni-Fe soleplate (+-1 mm) / magnet soleplate (+-0.5 mm)",
+            f"{SENS_NIFE / SENS_PM:.3g}",
+            "abstract; Sec. 3.2.4",
             f"{abs(nife['full']['hall_pair_sensitivity'] / moments['hall_pair_sensitivity']):.3g}",
             ratio(abs(nife["full"]["hall_pair_sensitivity"] / moments["hall_pair_sensitivity"]), SENS_NIFE / SENS_PM),
             inside(abs(nife["full"]["hall_pair_sensitivity"] / moments["hall_pair_sensitivity"]), SENS_NIFE / SENS_PM),
-            f"tolerance x{FACTOR:g}; free of Hc (both fields scale as Hc). Condition 1 as above"),
-        row("initial_force", "restoring force at 10 deg, initial model (Fe, mu_r 300, gap 0.8 mm)", "12.57 uN", "Sec. 3.1.1, Fig. 3.3",
-            f"moments: {initial_text} uN for pole magnets of diameter {magnets} mm", f"x{initial[0]['force_at_10deg'] / INITIAL_FORCE:.3g} "
-            f"to x{initial[-1]['force_at_10deg'] / INITIAL_FORCE:.3g}", None,
+            f"tolerance x{FACTOR:g}; free of Hc (both fields scale as Hc). Condition 1 as above",
+        ),
+        row(
+            "initial_force",
+            "restoring force at 10 deg, initial model (Fe, mu_r 300, gap 0.8 mm)",
+            "12.57 uN",
+            "Sec. 3.1.1, Fig. 3.3",
+            f"moments: {initial_text} uN for pole magnets of diameter {magnets} mm",
+            f"x{initial[0]['force_at_10deg'] / INITIAL_FORCE:.3g} "
+            f"to x{initial[-1]['force_at_10deg'] / INITIAL_FORCE:.3g}",
+            None,
             "the magnet's size and the pole's diameter are lost (assumed: a 1.2 mm x 5.5 mm rod, magnets 2 mm tall); "
-            "not a verdict"),
-        row("design_rule", "restoring force at 1 deg with Hc = 200 kA/m, initial model", "1 uN", "Sec. 3.1.1, Fig. 3.2; Ch. 5",
+            "not a verdict",
+        ),
+        row(
+            "design_rule",
+            "restoring force at 1 deg with Hc = 200 kA/m, initial model",
+            "1 uN",
+            "Sec. 3.1.1, Fig. 3.2; Ch. 5",
             f"moments: {', '.join(f'{v:.3g}' for v in at_1deg)} uN; 1 uN would need Hc = "
-            f"{', '.join(f'{hc:.3g}' for hc in initial_hc)} kA/m", f"x{initial[0]['force_at_1deg'] / AIM_FORCE:.3g} to "
-            f"x{initial[-1]['force_at_1deg'] / AIM_FORCE:.3g}", None, "as the row above (F ~ Hc^2 for linear materials)"),
-        row("gmr", "GMR sensitivity (Panasonic meander, 0.6 V bias)", "0.131 mV per A/m", "Sec. 4.3, Fig. 4.7",
-            f"{gmr_gain * 1e3:.6g} mV per A/m", f"{gmr_gain / GMR_VOLTS_PER_AM - 1:+.1e}",
-            abs(gmr_gain / GMR_VOLTS_PER_AM - 1) <= GMR_TOLERANCE, "tolerance 1e-6: the preset is defined from this number"),
+            f"{', '.join(f'{hc:.3g}' for hc in initial_hc)} kA/m",
+            f"x{initial[0]['force_at_1deg'] / AIM_FORCE:.3g} to x{initial[-1]['force_at_1deg'] / AIM_FORCE:.3g}",
+            None,
+            "as the row above (F ~ Hc^2 for linear materials)",
+        ),
+        row(
+            "gmr",
+            "GMR sensitivity (Panasonic meander, 0.6 V bias)",
+            "0.131 mV per A/m",
+            "Sec. 4.3, Fig. 4.7",
+            f"{gmr_gain * 1e3:.6g} mV per A/m",
+            f"{gmr_gain / GMR_VOLTS_PER_AM - 1:+.1e}",
+            abs(gmr_gain / GMR_VOLTS_PER_AM - 1) <= GMR_TOLERANCE,
+            "tolerance 1e-6: the preset is defined from this number",
+        ),
     ]
     report.comparison(rows)
 
@@ -442,26 +601,49 @@ def main(argv=None):
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.4, 6.4), sharex=True)
     degrees, nonzero = grid / deg, grid != 0
     for name, level, style in (("moments", moments, "-"), ("reduced", charge, "--")):
-        top.plot(degrees, level["restoring_force"] * 1e3, style, label=f"{name}: k = {level['spring_coefficient'] / K_UNIT:.3g} uN/deg")
-        bottom.plot(degrees[nonzero], level["restoring_force"][nonzero] / (level["spring_coefficient"] * grid[nonzero]), style, label=name)
+        top.plot(
+            degrees,
+            level["restoring_force"] * 1e3,
+            style,
+            label=f"{name}: k = {level['spring_coefficient'] / K_UNIT:.3g} uN/deg",
+        )
+        bottom.plot(
+            degrees[nonzero],
+            level["restoring_force"][nonzero] / (level["spring_coefficient"] * grid[nonzero]),
+            style,
+            label=name,
+        )
     top.axvspan(-LINEAR_RANGE / deg, LINEAR_RANGE / deg, color="0.9", label="published linear range +-40 deg")
     top.set_ylabel("restoring force per ball radius (mN)")
     top.legend(fontsize=8)
-    top.set_title(f"the published k theta (Table 3.1 as uN/deg) is x{K_PM_FULL / k:.2g} of the moments level's", fontsize=9)
+    top.set_title(
+        f"the published k theta (Table 3.1 as uN/deg) is x{K_PM_FULL / k:.2g} of the moments level's", fontsize=9
+    )
     bottom.axhspan(1 - LINEARITY, 1 + LINEARITY, color="0.85", label="within 10 %")
     for sign in (-1, 1):
         bottom.axvline(sign * LINEAR_RANGE / deg, color="k", lw=0.8)
     bottom.set_xlabel("tilt theta (deg)")
     bottom.set_ylabel("F / (k theta)")
     bottom.legend(fontsize=8)
-    report.figure(fig, "restoring_force.png",
-                  f"Restoring force per ball radius (torque / {p['pole.ball_radius'] / mm:g} mm) against tilt at both levels, and "
-                  f"its ratio to each level's linear law; black lines: the thesis's +-40 deg")
+    report.figure(
+        fig,
+        "restoring_force.png",
+        f"Restoring force per ball radius (torque / {p['pole.ball_radius'] / mm:g} mm) against tilt at both levels, and "
+        f"its ratio to each level's linear law; black lines: the thesis's +-40 deg",
+    )
     force_at = lambda level, a: float(np.interp(a * deg, grid, level["restoring_force"]))  # noqa: E731
     report.table(
         ["tilt (deg)", "F moments (uN)", "F reduced (uN)", "F / (k theta) moments", "F / (k theta) reduced"],
-        [[a, force_at(moments, a) / uN, force_at(charge, a) / uN, force_at(moments, a) / (k * a * deg),
-          force_at(charge, a) / (k_red * a * deg)] for a in (1, 5, 10, 20, 30, 40, 50, 60)],
+        [
+            [
+                a,
+                force_at(moments, a) / uN,
+                force_at(charge, a) / uN,
+                force_at(moments, a) / (k * a * deg),
+                force_at(charge, a) / (k_red * a * deg),
+            ]
+            for a in (1, 5, 10, 20, 30, 40, 50, 60)
+        ],
     )
 
     report.heading("Where the gap in the spring coefficient could come from, checked")
@@ -472,10 +654,14 @@ def main(argv=None):
         f"linear, k scales as Br^2 exactly: Table 3.1 (as uN/deg) would need Br = {p['magnet.remanence'] * np.sqrt(K_PM_FULL / k) * 1e3:.3g} mT "
         f"(Hc = {200 * np.sqrt(K_PM_FULL / k):.3g} kA/m) instead of 200 kA/m."
     )
-    report.text("**1. The unit of Table 3.1** (lost in the text). The thesis's own test of its k: the 1 uN aim over k is a tilt "
-                "'within the operation range' (Sec. 3.2.2, Ch. 5). Torques are per ball radius.")
-    report.table(["Table 3.1's 0.068 read as", "k (N/rad)", "moments / published", "reduced / published", "tilt for 1 uN (deg)"],
-                 [[r["reading"], r["published"], r["moments_ratio"], r["reduced_ratio"], r["aim_tilt"] / deg] for r in readings])
+    report.text(
+        "**1. The unit of Table 3.1** (lost in the text). The thesis's own test of its k: the 1 uN aim over k is a tilt "
+        "'within the operation range' (Sec. 3.2.2, Ch. 5). Torques are per ball radius."
+    )
+    report.table(
+        ["Table 3.1's 0.068 read as", "k (N/rad)", "moments / published", "reduced / published", "tilt for 1 uN (deg)"],
+        [[r["reading"], r["published"], r["moments_ratio"], r["reduced_ratio"], r["aim_tilt"] / deg] for r in readings],
+    )
     report.text(
         f"The reading closest to the moments level is {closest['reading']} (x{closest['moments_ratio']:.3g}, "
         f"{'within' if inside(closest['moments_ratio'], 1) else 'outside'} x{FACTOR:g}); it keeps the 1 uN aim 'within the "
@@ -495,12 +681,29 @@ def main(argv=None):
         f"({gravity_half / K_UNIT:.3g} uN/deg), x{gravity_half / K_PM_HALF:.3g} Table 3.1's half pole as uN/deg. Under that reading "
         f"the FEM's magnetic spring would be weaker than gravity's on the rod, which the thesis never weighs."
     )
-    report.text(f"**3. A thinner pole** (the analysed pole was thinner than the prototype's 1.2 mm, Sec. 4.2; its diameter is lost).")
-    report.table(["pole diameter (mm)", "k (N/rad)", "k / Table 3.1", "max mu0 M at rest (T)",
-                  f"k with J_s {NIFE_SATURATION:g} T (N/rad)", "its max mu0 M (T)"],
-                 [[d / mm, v["spring_coefficient"], v["spring_coefficient"] / K_PM_FULL, v["peak_polarization"],
-                   *(saturated[d] if d in saturated else ("linear", "-"))]
-                  for d, v in zip(POLE_DIAMETERS, by_diameter)])
+    report.text(
+        "**3. A thinner pole** (the analysed pole was thinner than the prototype's 1.2 mm, Sec. 4.2; its diameter is lost)."
+    )
+    report.table(
+        [
+            "pole diameter (mm)",
+            "k (N/rad)",
+            "k / Table 3.1",
+            "max mu0 M at rest (T)",
+            f"k with J_s {NIFE_SATURATION:g} T (N/rad)",
+            "its max mu0 M (T)",
+        ],
+        [
+            [
+                d / mm,
+                v["spring_coefficient"],
+                v["spring_coefficient"] / K_PM_FULL,
+                v["peak_polarization"],
+                *(saturated[d] if d in saturated else ("linear", "-")),
+            ]
+            for d, v in zip(POLE_DIAMETERS, by_diameter)
+        ],
+    )
     report.text(
         f"k falls only as d^{slope:.2g} between the two thinnest: a thin rod is less demagnetised, so its magnetisation rises as its "
         f"section falls. Rods of {', '.join(f'{d / mm:g}' for d in saturates) or 'no'} mm pass the {NIFE_SATURATION:g} T of Ni-Fe at rest "
@@ -508,11 +711,17 @@ def main(argv=None):
         f"curve: the thesis gives Ni-Fe's mu_r only) their k is the last columns'. The least k over these poles is {thin:.3g} N/rad, "
         f"still x{thin / K_PM_FULL:.3g} Table 3.1."
     )
-    report.text("**4. A wider plate** (its size is lost; Fig. 3.6 shows the field gathering at its edges). A uniformly magnetised "
-                "sheet much wider than the gap has no field above its middle, so the pull falls as the plate widens.")
-    report.table(["plate radius (mm)", "k (N/rad)", "k / Table 3.1", "pull at rest (mN)"],
-                 [[r / mm, v["spring_coefficient"], v["spring_coefficient"] / K_PM_FULL, v["attraction"] * 1e3]
-                  for r, v in zip(PLATE_RADII, by_plate)])
+    report.text(
+        "**4. A wider plate** (its size is lost; Fig. 3.6 shows the field gathering at its edges). A uniformly magnetised "
+        "sheet much wider than the gap has no field above its middle, so the pull falls as the plate widens."
+    )
+    report.table(
+        ["plate radius (mm)", "k (N/rad)", "k / Table 3.1", "pull at rest (mN)"],
+        [
+            [r / mm, v["spring_coefficient"], v["spring_coefficient"] / K_PM_FULL, v["attraction"] * 1e3]
+            for r, v in zip(PLATE_RADII, by_plate)
+        ],
+    )
     report.text(
         f"k falls as R^{far:.2g} between {PLATE_RADII[-2] / mm:g} and {PLATE_RADII[-1] / mm:g} mm; at that rate Table 3.1 (as uN/deg) "
         f"needs a plate of radius ~{needed / mm:.3g} mm under a {2 * p['pole.ball_radius'] / mm:g} mm ball, not a plausible sensor. The "
@@ -524,9 +733,19 @@ def main(argv=None):
         f"a gap of 0.8 mm, a {2 * INITIAL['pole.ball_radius'] / mm:g} mm ball; assumed: a 1.2 mm x {INITIAL['pole.length'] / mm:g} mm rod and "
         f"a pole magnet {INITIAL['magnet.height'] / mm:g} mm tall (its size is lost)."
     )
-    report.table(["magnet diameter (mm)", "F at 1 deg (uN)", "F at 10 deg (uN)", "Hc for 1 uN at 1 deg (kA/m)", "max mu0 M at rest (T)"],
-                 [[2 * r / mm, v["force_at_1deg"] / uN, v["force_at_10deg"] / uN, hc, v["peak_polarization"]]
-                  for r, v, hc in zip(INITIAL_MAGNET_RADII, initial, initial_hc)])
+    report.table(
+        [
+            "magnet diameter (mm)",
+            "F at 1 deg (uN)",
+            "F at 10 deg (uN)",
+            "Hc for 1 uN at 1 deg (kA/m)",
+            "max mu0 M at rest (T)",
+        ],
+        [
+            [2 * r / mm, v["force_at_1deg"] / uN, v["force_at_10deg"] / uN, hc, v["peak_polarization"]]
+            for r, v, hc in zip(INITIAL_MAGNET_RADII, initial, initial_hc)
+        ],
+    )
     report.text(
         f"Against the published 1 uN at 1 deg and 12.57 uN at 10 deg the model gives x{initial[0]['force_at_1deg'] / AIM_FORCE:.3g} to "
         f"x{initial[-1]['force_at_1deg'] / AIM_FORCE:.3g}, with the Fe far from its {FE_SATURATION:g} T (so its B-H curve, Appendix A.1, "
@@ -561,8 +780,12 @@ def main(argv=None):
     axis.set_xlabel("x (mm)")
     axis.set_ylabel("B_z (mT)")
     axis.legend(fontsize=8, title="tilt")
-    report.figure(fig, "field_line.png", "B_z along x, 0.1 mm above the plate (as the thesis's Figs. 3.6-3.7), for tilts of 0-40 deg: "
-                  "moments level solid, reduced dashed; dotted: the Hall pair at +-0.5 mm")
+    report.figure(
+        fig,
+        "field_line.png",
+        "B_z along x, 0.1 mm above the plate (as the thesis's Figs. 3.6-3.7), for tilts of 0-40 deg: "
+        "moments level solid, reduced dashed; dotted: the Hall pair at +-0.5 mm",
+    )
     report.text(
         f"Sensitivities over the first 10 deg (moments / reduced): the Hall pair's difference {sens(moments['hall_pair_sensitivity'])} / "
         f"{sens(charge['hall_pair_sensitivity'])}, one Hall chip at +0.5 mm {sens(moments['hall_single_sensitivity'])} / "
@@ -572,15 +795,28 @@ def main(argv=None):
     )
 
     report.heading("Convergence in the number of cells (moments level)")
-    names = {"spring_coefficient": ("k (N/rad)", 1.0), "force_at_10deg": ("F(10 deg) (uN)", uN), "linear_range": ("linear range (deg)", deg),
-             "hall_pair_sensitivity": ("Hall pair (mT/deg)", mT / deg), "gmr_field_sensitivity": ("GMR B_x (mT/deg)", mT / deg),
-             "attraction": ("pull (mN)", 1e-3)}
+    names = {
+        "spring_coefficient": ("k (N/rad)", 1.0),
+        "force_at_10deg": ("F(10 deg) (uN)", uN),
+        "linear_range": ("linear range (deg)", deg),
+        "hall_pair_sensitivity": ("Hall pair (mT/deg)", mT / deg),
+        "gmr_field_sensitivity": ("GMR B_x (mT/deg)", mT / deg),
+        "attraction": ("pull (mN)", 1e-3),
+    }
     if args.quick:
-        report.text(f"Quick mode computes the example's {cells_note} only; full mode tabulates {', '.join(map(str, CELLS))} cells.")
+        report.text(
+            f"Quick mode computes the example's {cells_note} only; full mode tabulates {', '.join(map(str, CELLS))} cells."
+        )
     else:
-        report.table(["cells along the rod", "cells in all"] + [label for label, _ in names.values()] + ["seconds (with compile)"],
-                     [[c, v["cells"]] + [v[key] / scale for key, (_, scale) in names.items()] + [v["seconds"]]
-                      for c, v in convergence.items()])
+        report.table(
+            ["cells along the rod", "cells in all"]
+            + [label for label, _ in names.values()]
+            + ["seconds (with compile)"],
+            [
+                [c, v["cells"]] + [v[key] / scale for key, (_, scale) in names.items()] + [v["seconds"]]
+                for c, v in convergence.items()
+            ],
+        )
         finest, previous = CELLS[-1], CELLS[-2]
         errors = {}
         for key in names:
@@ -588,9 +824,18 @@ def main(argv=None):
             richardson = abs(values[-1] - values[-2]) * previous / (finest - previous) / abs(values[-1])
             spread = (max(values[-3:]) - min(values[-3:])) / abs(values[-1])
             errors[key] = {"richardson": richardson, "spread": spread}
-        report.table(["quantity", f"reference ({finest} cells)", "error estimate, first order (rel.)", "spread of the 3 finest (rel.)"],
-                     [[label, convergence[finest][key] / scale, errors[key]["richardson"], errors[key]["spread"]]
-                      for key, (label, scale) in names.items()])
+        report.table(
+            [
+                "quantity",
+                f"reference ({finest} cells)",
+                "error estimate, first order (rel.)",
+                "spread of the 3 finest (rel.)",
+            ],
+            [
+                [label, convergence[finest][key] / scale, errors[key]["richardson"], errors[key]["spread"]]
+                for key, (label, scale) in names.items()
+            ],
+        )
         report.text(
             f"The reference is {finest} cells along the rod. Its error is estimated two ways: a first-order Richardson step from "
             f"{previous} to {finest} cells (the cells' size h ~ 1 / cells; k and the pull change about linearly in h from 12 cells on), "
@@ -610,22 +855,48 @@ def main(argv=None):
         )
 
     summary = lambda level: {key: value for key, value in level.items() if key != "line"}  # noqa: E731
-    report.result("published", {"linear_range": LINEAR_RANGE, "k_pm_full": K_PM_FULL, "k_pm_half": K_PM_HALF,
-                                 "k_nife_full": K_NIFE_FULL, "k_nife_half": K_NIFE_HALF, "initial_force": INITIAL_FORCE,
-                                 "aim_force": AIM_FORCE, "sensitivity_pm": SENS_PM, "sensitivity_nife": SENS_NIFE,
-                                 "gmr_volts_per_am": GMR_VOLTS_PER_AM})
-    report.result("tolerance", {"factor": FACTOR, "linearity": LINEARITY, "range": RANGE_TOLERANCE, "gmr": GMR_TOLERANCE})
+    report.result(
+        "published",
+        {
+            "linear_range": LINEAR_RANGE,
+            "k_pm_full": K_PM_FULL,
+            "k_pm_half": K_PM_HALF,
+            "k_nife_full": K_NIFE_FULL,
+            "k_nife_half": K_NIFE_HALF,
+            "initial_force": INITIAL_FORCE,
+            "aim_force": AIM_FORCE,
+            "sensitivity_pm": SENS_PM,
+            "sensitivity_nife": SENS_NIFE,
+            "gmr_volts_per_am": GMR_VOLTS_PER_AM,
+        },
+    )
+    report.result(
+        "tolerance", {"factor": FACTOR, "linearity": LINEARITY, "range": RANGE_TOLERANCE, "gmr": GMR_TOLERANCE}
+    )
     report.result("cells", spec["pole"]["cells"])
     report.result("tilt", grid)
     report.result("moments", summary(moments))
     report.result("reduced", summary(charge))
     report.result("half_pole", summary(half))
     report.result("nife_soleplate", nife)
-    report.result("pole_diameters", {"diameter": POLE_DIAMETERS, "levels": [summary(v) for v in by_diameter],
-                                     "saturated": {f"{d / mm:g} mm": {"spring_coefficient": k, "peak_polarization": peak}
-                                                   for d, (k, peak) in saturated.items()}})
-    report.result("plate_radii", {"radius": PLATE_RADII, "levels": [summary(v) for v in by_plate], "needed_for_table": needed})
-    report.result("initial_model", {"magnet_radius": INITIAL_MAGNET_RADII, "levels": [summary(v) for v in initial], "hc_for_aim": initial_hc})
+    report.result(
+        "pole_diameters",
+        {
+            "diameter": POLE_DIAMETERS,
+            "levels": [summary(v) for v in by_diameter],
+            "saturated": {
+                f"{d / mm:g} mm": {"spring_coefficient": k, "peak_polarization": peak}
+                for d, (k, peak) in saturated.items()
+            },
+        },
+    )
+    report.result(
+        "plate_radii", {"radius": PLATE_RADII, "levels": [summary(v) for v in by_plate], "needed_for_table": needed}
+    )
+    report.result(
+        "initial_model",
+        {"magnet_radius": INITIAL_MAGNET_RADII, "levels": [summary(v) for v in initial], "hc_for_aim": initial_hc},
+    )
     report.result("unit_readings", readings)
     report.result("weight", weight)
     report.result("gravity_half_pole", gravity_half)
@@ -634,9 +905,10 @@ def main(argv=None):
     if not args.quick:
         report.result("library_outputs", exact)
         report.result("planar", {"per_metre": planar, "depths": PLANAR_DEPTHS, "spring_coefficients": planar_k})
-        report.result("convergence", {"cells": CELLS, "levels": [summary(convergence[c]) for c in CELLS], "errors": errors})
+        report.result(
+            "convergence", {"cells": CELLS, "levels": [summary(convergence[c]) for c in CELLS], "errors": errors}
+        )
     report.write()
-
 
 
 if __name__ == "__main__":

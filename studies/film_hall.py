@@ -1,12 +1,13 @@
-"""Seed 004: a sinusoidally magnetised film over an elastomer layer, read by Hall taxels.
+"""The film-Hall sensor: a sinusoidally magnetised film over an elastomer layer, read by Hall
+taxels.
 
 Reproduces the design numbers of Yan et al., "Soft magnetic skin for super-resolution
 tactile sensing with force self-decoupling", Sci. Robot. 6, eabc8801 (2021)
-(/work/shared/seeds/004_*.txt): the attenuation distances of the film's field, the
+(docs/references.md): the attenuation distances of the film's field, the
 sensitivity-range trade-off against the period T and its "balance" periods, the solved
 (T, h) of the design, and the self-decoupling of normal and shear force.
 
-    python studies/seed004_film_hall.py [--quick] [--out DIR]
+    python studies/film_hall.py [--quick] [--out DIR]
 """
 
 import copy
@@ -21,9 +22,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from _report import Report, arguments, progress  # noqa: E402
 from scipy.optimize import brentq  # noqa: E402
 
-from _report import Report, arguments, progress  # noqa: E402
 from magdesign.design import solve  # noqa: E402
 from magdesign.design.spec import load_spec, problem_from_spec  # noqa: E402
 from magdesign.fields import film, film_angle, film_magnitude  # noqa: E402
@@ -31,10 +32,11 @@ from magdesign.inverse import film_forces  # noqa: E402
 from magdesign.scene import Loads, outputs, scene_from_spec, simulate, with_parameters  # noqa: E402
 from magdesign.units import deg, kPa, mm, mT  # noqa: E402
 
-NAME = "seed004_film_hall"
+NAME = "film_hall"
+PAPER = "Yan et al., Sci. Robot. 6, eabc8801 (2021)"
 EXAMPLE = pathlib.Path(__file__).resolve().parents[1] / "examples" / "film_hall.toml"
 
-# Published numbers (seed 004). "Design" is the Results section "Tactile sensor design";
+# Published numbers (Yan et al. 2021). "Design" is the Results section "Tactile sensor design";
 # "Decoupling" the Results section "Sensor self-decoupling mechanism"; "Methods" the
 # Materials and Methods section "Sensor characterization".
 PERIOD = 6.0 * mm  # T, Design
@@ -47,7 +49,8 @@ FIELD_FRACTION = 0.02  # "h is chosen within 3.8 mm where B >= 0.02 Bmax", Desig
 H_BOUND = 3.8 * mm  # same sentence
 BALANCE_NORMAL = 5.81 * mm  # T1, Design (details in fig. S2, not in the text)
 BALANCE_SHEAR = 6.24 * mm  # T2, Design
-NORMAL_SENSITIVITY = 0.01 / kPa  # d(dB%)/dP, Eq. 2, for P <= 120 kPa; Design (fig. S3)
+NORMAL_SENSITIVITY = 0.01 / kPa  # d(dB%)/dP, Eq. 2, for P <= 120 kPa; Design (fig. S3); a fraction of B per kPa
+NORMAL_RANGE = 120 * kPa  # the range of that sensitivity; Design
 SHEAR_SENSITIVITY = 0.1 / kPa  # for shear P <= 10 kPa; Design (fig. S3)
 SHEAR_RANGE = 16 * kPa  # shear measured up to 16 kPa (0.27 /kPa above 10 kPa); Design
 FACE = 18 * mm  # the film is 18 mm x 18 mm; Methods, "Characterization for super-resolution"
@@ -133,8 +136,9 @@ def attenuation_distance(fraction, magnitude) -> float:
 def finite_magnitude(periods):
     """|B| (T, per tesla of J0) at depths z (a float or an array) below the centre of a film
     ``periods`` wide."""
-    field = jax.jit(lambda z: jnp.hypot(*film(0.0, z, period=PERIOD, thickness=FILM_THICKNESS,
-                                              magnetization=1.0, periods=periods)))
+    field = jax.jit(
+        lambda z: jnp.hypot(*film(0.0, z, period=PERIOD, thickness=FILM_THICKNESS, magnetization=1.0, periods=periods))
+    )
     return lambda z: float(field(z)) if np.ndim(z) == 0 else np.asarray(field(jnp.asarray(z)))
 
 
@@ -154,8 +158,12 @@ def verdict(value, published, tolerance) -> str:
 def attenuation():
     """Attenuation distances: infinite film (closed form) and finite strips (exact)."""
     progress("attenuation distances")
-    infinite = {a: attenuation_distance(a, lambda z: float(film_magnitude(
-        z, period=PERIOD, thickness=FILM_THICKNESS, magnetization=1.0))) for a in ATTENUATION}
+    infinite = {
+        a: attenuation_distance(
+            a, lambda z: float(film_magnitude(z, period=PERIOD, thickness=FILM_THICKNESS, magnetization=1.0))
+        )
+        for a in ATTENUATION
+    }
     strips = {}
     for periods in (1, 3):
         magnitude = finite_magnitude(periods)
@@ -173,8 +181,12 @@ def shear_loads(scene):
 
 def shear_balance(scene, loads) -> float:
     """T2: the period whose field angle reaches 90 deg at the published largest shear."""
-    return brentq(lambda t: float(period_outputs(scene, loads, jnp.asarray(t))["shear_phase_max"]) - math.pi / 2,
-                  3 * mm, 20 * mm, xtol=1e-12)
+    return brentq(
+        lambda t: float(period_outputs(scene, loads, jnp.asarray(t))["shear_phase_max"]) - math.pi / 2,
+        3 * mm,
+        20 * mm,
+        xtol=1e-12,
+    )
 
 
 def trade_off(spec, quick):
@@ -188,8 +200,12 @@ def trade_off(spec, quick):
     # shear range: the shear pressure at which the field angle reaches 90 deg (u_x linear in load)
     curves["shear_range"] = SHEAR_RANGE * (math.pi / 2) / curves["shear_phase_max"]
 
-    balance_normal = brentq(lambda t: float(period_outputs(scene, loads, jnp.asarray(t))["field_fraction"])
-                            - FIELD_FRACTION, 3 * mm, 12 * mm, xtol=1e-12)
+    balance_normal = brentq(
+        lambda t: float(period_outputs(scene, loads, jnp.asarray(t))["field_fraction"]) - FIELD_FRACTION,
+        3 * mm,
+        12 * mm,
+        xtol=1e-12,
+    )
     balance_shear = shear_balance(scene, loads)
     at_published = period_outputs(scene, loads, jnp.asarray(PERIOD))
     return periods, curves, balance_normal, balance_shear, {k: float(v) for k, v in at_published.items()}, scene
@@ -229,8 +245,10 @@ def decoupling(spec):
     for periods in (None, 1, 3):
         scene = scene_from_spec(varied(spec, magnet={} if periods is None else {"periods": periods}))
         stiffness = scene.layer.stiffness
-        loads = Loads(jnp.asarray(dz * float(stiffness.normal)),
-                      jnp.stack([jnp.asarray(dx * float(stiffness.shear)), jnp.zeros(dx.size)], axis=-1))
+        loads = Loads(
+            jnp.asarray(dz * float(stiffness.normal)),
+            jnp.stack([jnp.asarray(dx * float(stiffness.shear)), jnp.zeros(dx.size)], axis=-1),
+        )
         field = taxel_field(scene, loads)
         magnitude = np.asarray(jnp.linalg.norm(field, axis=-1)).reshape(STEPS, STEPS)  # [dz, dx]
         angle = np.asarray(field_angle(field)).reshape(STEPS, STEPS)
@@ -267,11 +285,18 @@ def attenuation_figure(report, strips):
         ax.plot(depth / mm, 1 - fraction, "ko")
     ax.plot([], [], "ko", label="published (Fig. 1C text)")
     ax.axvline(LAYER_THICKNESS / mm, color="grey", lw=0.8, ls=":")
-    ax.set(xlabel="depth z below the film's face (mm)", ylabel="|B|(z) / |B|(0)",
-           title=f"T = {PERIOD / mm:g} mm, d = {FILM_THICKNESS / mm:g} mm")
+    ax.set(
+        xlabel="depth z below the film's face (mm)",
+        ylabel="|B|(z) / |B|(0)",
+        title=f"T = {PERIOD / mm:g} mm, d = {FILM_THICKNESS / mm:g} mm",
+    )
     ax.legend(fontsize=8)
-    report.figure(fig, "attenuation.png", "Decay of the film's |B| below its face at the taxel's lateral "
-                  "position; dots: the published 95/98/99 % attenuation distances; dotted: h = 3.5 mm.")
+    report.figure(
+        fig,
+        "attenuation.png",
+        "Decay of the film's |B| below its face at the taxel's lateral "
+        "position; dots: the published 95/98/99 % attenuation distances; dotted: h = 3.5 mm.",
+    )
 
 
 def trade_off_figure(report, periods, curves, balance_normal, balance_shear, calibrated_t2):
@@ -284,24 +309,35 @@ def trade_off_figure(report, periods, curves, balance_normal, balance_shear, cal
     ss.set(ylabel="d angle / dP = dR_B/dP at rest (1/kPa)", title="shear force: sensitivity")
     rn.semilogy(t, 100 * curves["field_fraction"], "C1")
     rn.axhline(100 * FIELD_FRACTION, color="C1", ls=":", label="2 % (paper's rule)")
-    rn.set(xlabel="period T (mm)", ylabel="|B| at the taxel / at the face (%)",
-           title="normal force: field kept at the taxel")
+    rn.set(
+        xlabel="period T (mm)",
+        ylabel="|B| at the taxel / at the face (%)",
+        title="normal force: field kept at the taxel",
+    )
     rs.plot(t, curves["shear_range"] / kPa, "C1")
     rs.axhline(SHEAR_RANGE / kPa, color="C1", ls=":", label="16 kPa (published range)")
     rs.set(xlabel="period T (mm)", ylabel="shear at 90 deg of field angle (kPa)", title="shear force: range")
-    for column, ours, published in ((axes[:, 0], balance_normal, BALANCE_NORMAL),
-                                    (axes[:, 1], balance_shear, BALANCE_SHEAR)):
+    for column, ours, published in (
+        (axes[:, 0], balance_normal, BALANCE_NORMAL),
+        (axes[:, 1], balance_shear, BALANCE_SHEAR),
+    ):
         for ax in column:
             ax.axvline(ours / mm, color="k", lw=1, label=f"magdesign balance {ours / mm:.2f} mm")
             ax.axvline(published / mm, color="k", ls="--", lw=1, label=f"published {published / mm:.2f} mm")
     for ax in axes[:, 1]:
-        ax.axvline(calibrated_t2 / mm, color="g", lw=1, label=f"G from the published 0.1/kPa: {calibrated_t2 / mm:.2f} mm")
+        ax.axvline(
+            calibrated_t2 / mm, color="g", lw=1, label=f"G from the published 0.1/kPa: {calibrated_t2 / mm:.2f} mm"
+        )
     for ax in axes.ravel():
         ax.legend(fontsize=7)
     fig.tight_layout()
-    report.figure(fig, "trade_off.png", "Sensitivity (top; falls as 1/T) and what bounds the range (bottom; "
-                  "rises with T) against the period at the published d = 0.5 mm, h = 3.5 mm, E = 83 kPa; the "
-                  "balance is the shortest T whose range covers the need (dotted lines).")
+    report.figure(
+        fig,
+        "trade_off.png",
+        "Sensitivity (top; falls as 1/T) and what bounds the range (bottom; "
+        "rises with T) against the period at the published d = 0.5 mm, h = 3.5 mm, E = 83 kPa; the "
+        "balance is the shortest T whose range covers the need (dotted lines).",
+    )
 
 
 def decoupling_figure(report, rows):
@@ -313,14 +349,17 @@ def decoupling_figure(report, rows):
             left.plot(steps, row["magnitude"][:, j] / mT, "o-", ms=3, label=f"dX = {steps[j]:.2f} mm")
             right.plot(steps, row["angle"][j, :] / deg, "o-", ms=3, label=f"dZ = {steps[j]:.2f} mm")
         left.set(xlabel="normal displacement dZ (mm)", ylabel="|B| at the taxel (mT)", title=f"{name}: |B|")
-        right.set(xlabel="shear displacement dX (mm)", ylabel="field angle atan2(Bx, Bz) (deg)",
-                  title=f"{name}: angle")
+        right.set(xlabel="shear displacement dX (mm)", ylabel="field angle atan2(Bx, Bz) (deg)", title=f"{name}: angle")
     axes[0, 0].legend(fontsize=6, title="one line per shear", title_fontsize=6)
     axes[0, 1].legend(fontsize=6, title="one line per normal", title_fontsize=6)
     fig.tight_layout()
-    report.figure(fig, "decoupling.png", "The paper's 7 x 7 grid of displacement loads (0.25 mm steps): "
-                  "|B| against normal displacement with one line per shear (lines on top of each other where "
-                  "shear does not change |B|), and the angle against shear with one line per normal load.")
+    report.figure(
+        fig,
+        "decoupling.png",
+        "The paper's 7 x 7 grid of displacement loads (0.25 mm steps): "
+        "|B| against normal displacement with one line per shear (lines on top of each other where "
+        "shear does not change |B|), and the angle against shear with one line per normal load.",
+    )
 
 
 # ---------------------------------------------------------------------------------------
@@ -328,7 +367,9 @@ def decoupling_figure(report, rows):
 
 def main(argv=None):
     args = arguments(NAME, argv, __doc__)
-    report = Report(NAME, "Seed 004: sinusoidally magnetised film over Hall taxels", args.out, args.quick)
+    report = Report(
+        NAME, f"Film-Hall sensor: sinusoidally magnetised film over Hall taxels ({PAPER})", args.out, args.quick
+    )
     spec = base_spec()
 
     infinite, strips, (k_low, k_high) = attenuation()
@@ -348,88 +389,171 @@ def main(argv=None):
     s_target = result.targets["normal_sensitivity"]["target"]
 
     above = [z / infinite[a] - 1 for a, z in ATTENUATION.items()]
-    distance_why = (f"infinite film, exact; tolerance {100 * DISTANCE_TOL:g} %: the published distances lie "
-                    f"{100 * min(above):.1f}..{100 * max(above):.1f} % above e^(-kz) at T = {PERIOD / mm:g} mm, as if "
-                    f"read off Fig. 1C's curve (rounded to 0.1 mm they fit e^(-kz) only for "
-                    f"T = {2 * math.pi / k_high / mm:.2f}..{2 * math.pi / k_low / mm:.2f} mm)")
+    distance_why = (
+        f"infinite film, exact; tolerance {100 * DISTANCE_TOL:g} %: the published distances lie "
+        f"{100 * min(above):.1f}..{100 * max(above):.1f} % above e^(-kz) at T = {PERIOD / mm:g} mm, as if "
+        f"read off Fig. 1C's curve (rounded to 0.1 mm they fit e^(-kz) only for "
+        f"T = {2 * math.pi / k_high / mm:.2f}..{2 * math.pi / k_low / mm:.2f} mm)"
+    )
     comparison = [
-        {"quantity": f"attenuation distance, {int(100 * a)} % (\\|B\\| = {100 * (1 - a):.0f} % of the face value)",
-         "published": f"{z / mm:.1f} mm", "source": "Design, Fig. 1C",
-         "magdesign": f"{infinite[a] / mm:.3f} mm", "difference": verdict(infinite[a], z, DISTANCE_TOL),
-         "why": distance_why if i == 0 else "as above"}
+        {
+            "quantity": f"attenuation distance, {int(100 * a)} % (\\|B\\| = {100 * (1 - a):.0f} % of the face value)",
+            "published": f"{z / mm:.1f} mm",
+            "source": "Design, Fig. 1C",
+            "magdesign": f"{infinite[a] / mm:.3f} mm",
+            "difference": verdict(infinite[a], z, DISTANCE_TOL),
+            "why": distance_why if i == 0 else "as above",
+        }
         for i, (a, z) in enumerate(ATTENUATION.items())
     ]
     comparison += [
-        {"quantity": "balance period T1, normal force", "published": f"{BALANCE_NORMAL / mm:.2f} mm",
-         "source": "Design (fig. S2)", "magdesign": f"{t1 / mm:.3f} mm", "difference": verdict(t1, BALANCE_NORMAL, BALANCE_TOL),
-         "why": (f"our definition (fig. S2's is not in the text): the shortest T, i.e. the most sensitive, whose "
-                 f"field at the taxel (h = 3.5 mm) keeps the paper's 2 % of the face field; tolerance "
-                 f"{100 * BALANCE_TOL:g} % for a definition inferred from the text")},
-        {"quantity": "balance period T2, shear force", "published": f"{BALANCE_SHEAR / mm:.2f} mm",
-         "source": "Design (fig. S2)", "magdesign": f"{t2 / mm:.3f} mm", "difference": verdict(t2, BALANCE_SHEAR, BALANCE_TOL),
-         "why": (f"our definition: the shortest T whose field angle stays within 90 deg up to the published "
-                 f"{SHEAR_RANGE / kPa:g} kPa of shear, with the Hooke layer's nominal G = E / 2(1 + nu) = "
-                 f"{g_nominal / kPa:.1f} kPa; the published shear sensitivity implies G = {g_calibrated / kPa:.1f} kPa "
-                 "(next rows)")},
-        {"quantity": "balance period T2, G from the published shear sensitivity",
-         "published": f"{BALANCE_SHEAR / mm:.2f} mm", "source": "Design (fig. S2, fig. S3)",
-         "magdesign": f"{t2_calibrated / mm:.3f} mm", "difference": verdict(t2_calibrated, BALANCE_SHEAR, BALANCE_TOL),
-         "why": (f"same definition, G = {g_calibrated / kPa:.1f} kPa set so that dR_B/dP at rest is the "
-                 f"published 0.1 /kPa at T = 6 mm; tolerance {100 * BALANCE_TOL:g} %")},
-        {"quantity": "shear sensitivity dR_B/dP at rest", "published": f"{SHEAR_SENSITIVITY * kPa:g} /kPa",
-         "source": "Design (fig. S3), shear <= 10 kPa", "magdesign": f"{shear_hooke * kPa:.4f} /kPa",
-         "difference": percent(shear_hooke, SHEAR_SENSITIVITY),
-         "why": ("Hooke layer, nominal G from E = 83 kPa, nu = 0.49: k h / G; the built sensor is stiffer in "
-                 "shear (its value is also a fit over 0..10 kPa, where the model's tan(kx) steepens further)")},
-        {"quantity": f"normal sensitivity d(dB%)/dP (Eq. 2), one {contact_area(scene) / mm**2:g} mm^2 cell, Hooke layer",
-         "published": f"{NORMAL_SENSITIVITY * kPa:g} /kPa", "source": "Design (fig. S3), P <= 120 kPa",
-         "magdesign": f"{normal_hooke * kPa:.4f} /kPa", "difference": percent(normal_hooke, NORMAL_SENSITIVITY),
-         "why": "k h / E: a layer free to bulge under one cell's contact is far softer than the bonded, cast layer"},
-        {"quantity": "normal sensitivity, whole 18 x 18 mm face on a bonded layer",
-         "published": f"{NORMAL_SENSITIVITY * kPa:g} /kPa", "source": "Design (fig. S3), P <= 120 kPa",
-         "magdesign": f"{bonded * kPa:.4f} /kPa", "difference": verdict(bonded, NORMAL_SENSITIVITY, BONDED_TOL),
-         "why": ("layer fidelity 'bonded' (shape-factor correction, Gent & Lindley) under the full face; "
-                 f"tolerance {100 * BONDED_TOL:g} %: that correction is approximate at shape factor ~1.5 and the contact of the "
-                 "paper's test is not stated")},
-        {"quantity": "solved period T (design solve)", "published": f"{PERIOD / mm:g} mm", "source": "Design",
-         "magdesign": f"{solved_t / mm:.3f} mm ({result.status})", "difference": percent(solved_t, PERIOD),
-         "why": (f"not a reproduction: the 2 % rule fixes only h/T; the spec's second target "
-                 f"({s_target / mT:g} mT/N at J0 = {float(scene.magnetization) / mT:g} mT, from the example) is "
-                 f"not published and sets the scale; the paper picked T = 6 mm between T1 and T2")},
-        {"quantity": "solved layer h (design solve)", "published": f"{LAYER_THICKNESS / mm:g} mm",
-         "source": "Design", "magdesign": f"{solved_h / mm:.3f} mm", "difference": percent(solved_h, LAYER_THICKNESS),
-         "why": "as above; the paper also kept h below its 2 % bound (3.5 < 3.8 mm)"},
-        {"quantity": "h / T from the 2 % rule", "published": f"<= {H_BOUND / PERIOD:.4f} (3.8 mm / 6 mm)",
-         "source": "Design", "magdesign": f"{solved_h / solved_t:.4f}",
-         "difference": percent(solved_h / solved_t, H_BOUND / PERIOD),
-         "why": (f"the solve's field_fraction = {FIELD_FRACTION:g} target; the same "
-                 f"{percent(infinite[0.98], ATTENUATION[0.98])} as the 98 % distance "
-                 f"({infinite[0.98] / mm:.3f} vs {ATTENUATION[0.98] / mm:g} mm)")},
-        {"quantity": "\\|B\\| change under shear at fixed normal load", "published": "none (B constant)",
-         "source": "Decoupling, Fig. 2G", "magdesign": f"{ideal['magnitude_coupling']:.1e} (infinite film); "
-         f"{coupled['magnitude_coupling']:.1e} (18 mm film)", "difference": "-",
-         "why": "an infinite film decouples exactly; a film 3 periods wide has edges, so \\|B\\| moves with shear"},
-        {"quantity": "field angle change under normal load at fixed shear", "published": "none (R_B constant)",
-         "source": "Decoupling, Fig. 2J", "magdesign": f"{ideal['angle_coupling'] / deg:.1e} deg (infinite); "
-         f"{coupled['angle_coupling'] / deg:.2f} deg (18 mm film)", "difference": "-",
-         "why": "as above"},
-        {"quantity": "RMSE of Fz from Eq. 3", "published": f"{RMSE_NORMAL:g} N", "source": "Decoupling, Fig. 2F",
-         "magdesign": f"{ideal['rmse_normal']:.1e} N (infinite); {coupled['rmse_normal']:.3f} N (18 mm film)",
-         "difference": "-",
-         "why": ("not the same error: the paper fits c1, b1 to measurements; here Eq. 3 with c1 = 1, b1 = 0 "
-                 "reads the model's own forces, exact for the infinite film; the 18 mm film's RMSE is the "
-                 f"closed form's own error (loads up to {coupled['max_normal']:.2f} N)")},
+        {
+            "quantity": "balance period T1, normal force",
+            "published": f"{BALANCE_NORMAL / mm:.2f} mm",
+            "source": "Design (fig. S2)",
+            "magdesign": f"{t1 / mm:.3f} mm",
+            "difference": verdict(t1, BALANCE_NORMAL, BALANCE_TOL),
+            "why": (
+                f"our definition (fig. S2's is not in the text): the shortest T, i.e. the most sensitive, whose "
+                f"field at the taxel (h = 3.5 mm) keeps the paper's 2 % of the face field; tolerance "
+                f"{100 * BALANCE_TOL:g} % for a definition inferred from the text"
+            ),
+        },
+        {
+            "quantity": "balance period T2, shear force",
+            "published": f"{BALANCE_SHEAR / mm:.2f} mm",
+            "source": "Design (fig. S2)",
+            "magdesign": f"{t2 / mm:.3f} mm",
+            "difference": verdict(t2, BALANCE_SHEAR, BALANCE_TOL),
+            "why": (
+                f"our definition: the shortest T whose field angle stays within 90 deg up to the published "
+                f"{SHEAR_RANGE / kPa:g} kPa of shear, with the Hooke layer's nominal G = E / 2(1 + nu) = "
+                f"{g_nominal / kPa:.1f} kPa; the published shear sensitivity implies G = {g_calibrated / kPa:.1f} kPa "
+                "(next rows)"
+            ),
+        },
+        {
+            "quantity": "balance period T2, G from the published shear sensitivity",
+            "published": f"{BALANCE_SHEAR / mm:.2f} mm",
+            "source": "Design (fig. S2, fig. S3)",
+            "magdesign": f"{t2_calibrated / mm:.3f} mm",
+            "difference": verdict(t2_calibrated, BALANCE_SHEAR, BALANCE_TOL),
+            "why": (
+                f"same definition, G = {g_calibrated / kPa:.1f} kPa set so that dR_B/dP at rest is the "
+                f"published 0.1 /kPa at T = 6 mm; tolerance {100 * BALANCE_TOL:g} %"
+            ),
+        },
+        {
+            "quantity": "shear sensitivity dR_B/dP at rest",
+            "published": f"{SHEAR_SENSITIVITY * kPa:g} /kPa",
+            "source": "Design (fig. S3), shear <= 10 kPa",
+            "magdesign": f"{shear_hooke * kPa:.4f} /kPa",
+            "difference": percent(shear_hooke, SHEAR_SENSITIVITY),
+            "why": (
+                "Hooke layer, nominal G from E = 83 kPa, nu = 0.49: k h / G; the built sensor is stiffer in "
+                "shear (its value is also a fit over 0..10 kPa, where the model's tan(kx) steepens further)"
+            ),
+        },
+        {
+            "quantity": f"normal sensitivity d(dB%)/dP (Eq. 2), one {contact_area(scene) / mm**2:g} mm^2 cell, Hooke layer",
+            "published": f"{NORMAL_SENSITIVITY * kPa:g} /kPa",
+            "source": "Design (fig. S3), P <= 120 kPa",
+            "magdesign": f"{normal_hooke * kPa:.4f} /kPa",
+            "difference": percent(normal_hooke, NORMAL_SENSITIVITY),
+            "why": (
+                "k h / E: a layer free to bulge under one cell's contact is far softer than the bonded, cast "
+                "layer. 0.01 /kPa read as a fraction of B per kPa (1 %/kPa; section 2 says why); read as "
+                f"0.01 %/kPa it would lie {normal_hooke / (NORMAL_SENSITIVITY / 100):.0f} times below the model"
+            ),
+        },
+        {
+            "quantity": "normal sensitivity, whole 18 x 18 mm face on a bonded layer",
+            "published": f"{NORMAL_SENSITIVITY * kPa:g} /kPa",
+            "source": "Design (fig. S3), P <= 120 kPa",
+            "magdesign": f"{bonded * kPa:.4f} /kPa",
+            "difference": verdict(bonded, NORMAL_SENSITIVITY, BONDED_TOL),
+            "why": (
+                "layer fidelity 'bonded' (shape-factor correction, Gent & Lindley) under the full face; "
+                f"tolerance {100 * BONDED_TOL:g} %: that correction is approximate at shape factor ~1.5 and the contact of the "
+                "paper's test is not stated"
+            ),
+        },
+        {
+            "quantity": "solved period T (design solve)",
+            "published": f"{PERIOD / mm:g} mm",
+            "source": "Design",
+            "magdesign": f"{solved_t / mm:.3f} mm ({result.status})",
+            "difference": percent(solved_t, PERIOD),
+            "why": (
+                f"not a reproduction: the 2 % rule fixes only h/T; the spec's second target "
+                f"({s_target / mT:g} mT/N at J0 = {float(scene.magnetization) / mT:g} mT, from the example) is "
+                f"not published and sets the scale; the paper picked T = 6 mm between T1 and T2"
+            ),
+        },
+        {
+            "quantity": "solved layer h (design solve)",
+            "published": f"{LAYER_THICKNESS / mm:g} mm",
+            "source": "Design",
+            "magdesign": f"{solved_h / mm:.3f} mm",
+            "difference": percent(solved_h, LAYER_THICKNESS),
+            "why": "as above; the paper also kept h below its 2 % bound (3.5 < 3.8 mm)",
+        },
+        {
+            "quantity": "h / T from the 2 % rule",
+            "published": f"<= {H_BOUND / PERIOD:.4f} (3.8 mm / 6 mm)",
+            "source": "Design",
+            "magdesign": f"{solved_h / solved_t:.4f}",
+            "difference": percent(solved_h / solved_t, H_BOUND / PERIOD),
+            "why": (
+                f"the solve's field_fraction = {FIELD_FRACTION:g} target; the same "
+                f"{percent(infinite[0.98], ATTENUATION[0.98])} as the 98 % distance "
+                f"({infinite[0.98] / mm:.3f} vs {ATTENUATION[0.98] / mm:g} mm)"
+            ),
+        },
+        {
+            "quantity": "\\|B\\| change under shear at fixed normal load",
+            "published": "none (B constant)",
+            "source": "Decoupling, Fig. 2G",
+            "magdesign": f"{ideal['magnitude_coupling']:.1e} (infinite film); "
+            f"{coupled['magnitude_coupling']:.1e} (18 mm film)",
+            "difference": "-",
+            "why": "an infinite film decouples exactly; a film 3 periods wide has edges, so \\|B\\| moves with shear",
+        },
+        {
+            "quantity": "field angle change under normal load at fixed shear",
+            "published": "none (R_B constant)",
+            "source": "Decoupling, Fig. 2J",
+            "magdesign": f"{ideal['angle_coupling'] / deg:.1e} deg (infinite); "
+            f"{coupled['angle_coupling'] / deg:.2f} deg (18 mm film)",
+            "difference": "-",
+            "why": "as above",
+        },
+        {
+            "quantity": "RMSE of Fz from Eq. 3",
+            "published": f"{RMSE_NORMAL:g} N",
+            "source": "Decoupling, Fig. 2F",
+            "magdesign": f"{ideal['rmse_normal']:.1e} N (infinite); {coupled['rmse_normal']:.3f} N (18 mm film)",
+            "difference": "-",
+            "why": (
+                "not the same error: the paper fits c1, b1 to measurements; here Eq. 3 with c1 = 1, b1 = 0 "
+                "reads the model's own forces, exact for the infinite film; the 18 mm film's RMSE is the "
+                f"closed form's own error (loads up to {coupled['max_normal']:.2f} N)"
+            ),
+        },
     ]
     report.comparison(comparison)
 
     # --- the field and the paper's Eq. 1 ------------------------------------------------
     k = 2 * math.pi / PERIOD
-    ours = float(film_magnitude(LAYER_THICKNESS, period=PERIOD, thickness=FILM_THICKNESS,
-                                magnetization=float(scene.magnetization)))
+    ours = float(
+        film_magnitude(
+            LAYER_THICKNESS, period=PERIOD, thickness=FILM_THICKNESS, magnetization=float(scene.magnetization)
+        )
+    )
     printed = float(scene.magnetization) * math.expm1(k * FILM_THICKNESS) * math.exp(-k * LAYER_THICKNESS)
     report.heading("The film's field, and where the paper's Eq. 1 differs")
     report.text(
-        "magdesign's film (`magdesign.fields.film`) is the corrected field of PHYSICS.md 1.2: below an "
+        "magdesign's film (`magdesign.fields.film`) is the field of the film's magnetic charges: below an "
         "infinite film with polarization J0 (-sin kx, 0, cos kx), k = 2 pi / T, at depth z below its bottom "
         "face, |B| = J0 (1 - e^(-kd)) e^(-kz) and Bx / Bz = tan(kx). The paper's Eq. 1 prints "
         "M0 (e^(kd) - 1) e^(-kz), which is this field with z measured from the film's top face; with z from "
@@ -456,15 +580,21 @@ def main(argv=None):
         "`film_magnitude` (infinite film) and on `film(..., periods=N)` (a strip N periods wide, exact), at "
         "the strip's centre. For the infinite film the distance is ln(1 / (1 - a)) / k."
     )
-    table = [[f"{int(100 * a)} %", z / mm, infinite[a] / mm] + [strips[p][a] / mm for p in strips]
-             for a, z in ATTENUATION.items()]
-    report.table(["attenuation", "published (mm)", "infinite film (mm)"]
-                 + [f"{p} period(s) wide (mm)" for p in strips], table)
+    table = [
+        [f"{int(100 * a)} %", z / mm, infinite[a] / mm] + [strips[p][a] / mm for p in strips]
+        for a, z in ATTENUATION.items()
+    ]
+    report.table(
+        ["attenuation", "published (mm)", "infinite film (mm)"] + [f"{p} period(s) wide (mm)" for p in strips], table
+    )
+
     def rounded(distances):
         return sum(abs(distances[a] - z) <= 0.05 * mm for a, z in ATTENUATION.items())
 
-    between = sum(min(infinite[a], strips[3][a]) - 0.05 * mm <= z <= max(infinite[a], strips[3][a]) + 0.05 * mm
-                  for a, z in ATTENUATION.items())
+    between = sum(
+        min(infinite[a], strips[3][a]) - 0.05 * mm <= z <= max(infinite[a], strips[3][a]) + 0.05 * mm
+        for a, z in ATTENUATION.items()
+    )
     report.text(
         "A finite film decays differently at its centre (its edges carry magnetic charges). Within the published "
         f"values' 0.1 mm rounding the infinite film matches {rounded(infinite)} of the {len(ATTENUATION)} distances, "
@@ -492,13 +622,21 @@ def main(argv=None):
     )
     report.table(
         ["quantity", "published", "magdesign"],
-        [["T1 (normal)", f"{BALANCE_NORMAL / mm:.2f} mm", f"{t1 / mm:.3f} mm"],
-         ["T2 (shear), nominal G", f"{BALANCE_SHEAR / mm:.2f} mm", f"{t2 / mm:.3f} mm"],
-         [f"T2 (shear), G = {g_calibrated / kPa:.1f} kPa from the published 0.1 /kPa",
-          f"{BALANCE_SHEAR / mm:.2f} mm", f"{t2_calibrated / mm:.3f} mm"],
-         ["field at the taxel, T = 6 mm, h = 3.5 mm", ">= 2 %", f"{100 * published_design['field_fraction']:.2f} %"],
-         ["field angle at 16 kPa shear, T = 6 mm (nominal G)", "< 90 deg (measured to 16 kPa)",
-          f"{published_design['shear_phase_max'] / deg:.1f} deg"]],
+        [
+            ["T1 (normal)", f"{BALANCE_NORMAL / mm:.2f} mm", f"{t1 / mm:.3f} mm"],
+            ["T2 (shear), nominal G", f"{BALANCE_SHEAR / mm:.2f} mm", f"{t2 / mm:.3f} mm"],
+            [
+                f"T2 (shear), G = {g_calibrated / kPa:.1f} kPa from the published 0.1 /kPa",
+                f"{BALANCE_SHEAR / mm:.2f} mm",
+                f"{t2_calibrated / mm:.3f} mm",
+            ],
+            ["field at the taxel, T = 6 mm, h = 3.5 mm", ">= 2 %", f"{100 * published_design['field_fraction']:.2f} %"],
+            [
+                "field angle at 16 kPa shear, T = 6 mm (nominal G)",
+                "< 90 deg (measured to 16 kPa)",
+                f"{published_design['shear_phase_max'] / deg:.1f} deg",
+            ],
+        ],
     )
     peak = periods[np.argmax(curves["normal_sensitivity"])]
     report.text(
@@ -519,6 +657,24 @@ def main(argv=None):
         "0.27 /kPa above 10 kPa, so this is the model's limit, not a fit."
     )
     trade_off_figure(report, periods, curves, t1, t2, t2_calibrated)
+    literal = NORMAL_SENSITIVITY / 100  # 0.01 %/kPa as a fraction of B per pascal
+    report.text(
+        "Which reading of the published normal sensitivity. The paper defines dB% = |B - B0| / B0 x 100 % "
+        "(Eq. 2) and S = d(dB%) / dP, and states S = 0.01 kPa^-1. Taken as a number of percent per kPa, that is "
+        f"0.01 %/kPa, {normal_hooke / literal:.0f} times below the model's k h / E = {normal_hooke * kPa:.4f} /kPa. "
+        "This study reads it as a fraction of B per kPa, 1 %/kPa, for three reasons. (1) Percent is the "
+        "factor 0.01: 'x 100 %' leaves the ratio's value unchanged, and the paper writes S without a percent "
+        "sign. (2) The same sentence gives the shear sensitivity, 0.1 kPa^-1, in the same unit, and that one "
+        "is of R_B = Bx / Bz, a plain ratio: read so it implies a layer of G = "
+        f"{g_calibrated / kPa:.1f} kPa (nominal {g_nominal / kPa:.1f} kPa), where a percent reading would imply "
+        f"{100 * g_calibrated / 1e6:.1f} MPa. (3) Eq. 3, P = (c1 E / k h) ln(B / B0), has d ln B / dP = k h / (c1 E): "
+        f"the fraction reading needs the compensation coefficient c1 = {normal_hooke / NORMAL_SENSITIVITY:.1f}, "
+        f"of the order of the bonded layer's stiffening (the whole face on a bonded layer gives c1 = "
+        f"{normal_hooke / bonded:.1f}), where 0.01 %/kPa needs c1 = {normal_hooke / literal:.0f}: a field change "
+        f"of at most {100 * literal * NORMAL_RANGE:.1f} % over the published {NORMAL_RANGE / kPa:g} kPa, a film "
+        f"that moves {math.log1p(literal * NORMAL_RANGE) / k / 1e-6:.0f} um on the 3.5 mm Ecoflex layer. The "
+        "paper's fig. S3, where the number is measured, is not in its text."
+    )
 
     # --- design -------------------------------------------------------------------------
     report.heading("3. Solving (T, h) with the design solver")
@@ -528,17 +684,23 @@ def main(argv=None):
         "`magdesign.design.spec.problem_from_spec` and `magdesign.design.solve`. Its [design] table: "
         f"variables {', '.join(design_table['variables'])}; targets "
         f"{', '.join(f'{k} = {v}' for k, v in design_table['targets'].items())}; limits "
-        f"{', '.join(k + ' <= ' + v['upper'] for k, v in design_table['limits'].items())}; load sweep normal "
+        f"{', '.join(k + ' <= ' + str(v['upper']) for k, v in design_table['limits'].items())}; load sweep normal "
         f"{design_spec['load']['normal']}, shear {design_spec['load']['shear_x']}."
     )
     targets, limit = design_table["targets"], design_table["limits"]["shear_phase_max"]["upper"]
-    report.table(["quantity", "solved"], [
-        ["period T", f"{solved_t / mm:.4f} mm"],
-        ["layer thickness h", f"{solved_h / mm:.4f} mm"],
-        [f"field_fraction (target {targets['field_fraction']})", f"{result.outputs['field_fraction']:.4f}"],
-        [f"normal_sensitivity (target {targets['normal_sensitivity']})", f"{result.outputs['normal_sensitivity'] / mT:.4f} mT/N"],
-        [f"shear_phase_max (limit <= {limit})", f"{result.outputs['shear_phase_max'] / deg:.2f} deg"],
-    ])
+    report.table(
+        ["quantity", "solved"],
+        [
+            ["period T", f"{solved_t / mm:.4f} mm"],
+            ["layer thickness h", f"{solved_h / mm:.4f} mm"],
+            [f"field_fraction (target {targets['field_fraction']})", f"{result.outputs['field_fraction']:.4f}"],
+            [
+                f"normal_sensitivity (target {targets['normal_sensitivity']})",
+                f"{result.outputs['normal_sensitivity'] / mT:.4f} mT/N",
+            ],
+            [f"shear_phase_max (limit <= {limit})", f"{result.outputs['shear_phase_max'] / deg:.2f} deg"],
+        ],
+    )
     dt = result.derivatives["normal_sensitivity"]["magnet.period"]
     report.text(
         f"Status {result.status} in {result.steps} steps. The published target, 2 % of the face field at "
@@ -563,11 +725,25 @@ def main(argv=None):
         "b1 = b2 = 0 (`magdesign.inverse.film_forces`)."
     )
     report.table(
-        ["film", "max \\|B\\| change under shear (relative)", "max angle change under normal load (deg)",
-         "Eq. 3 RMSE Fz (N)", "Eq. 3 RMSE Fx (N)", "largest Fz, Fx (N)"],
-        [["infinite" if p is None else f"{p} period(s), {p * PERIOD / mm:g} mm wide", row["magnitude_coupling"],
-          row["angle_coupling"] / deg, row["rmse_normal"], row["rmse_shear"],
-          f"{row['max_normal']:.3g}, {row['max_shear']:.3g}"] for p, row in rows.items()],
+        [
+            "film",
+            "max \\|B\\| change under shear (relative)",
+            "max angle change under normal load (deg)",
+            "Eq. 3 RMSE Fz (N)",
+            "Eq. 3 RMSE Fx (N)",
+            "largest Fz, Fx (N)",
+        ],
+        [
+            [
+                "infinite" if p is None else f"{p} period(s), {p * PERIOD / mm:g} mm wide",
+                row["magnitude_coupling"],
+                row["angle_coupling"] / deg,
+                row["rmse_normal"],
+                row["rmse_shear"],
+                f"{row['max_normal']:.3g}, {row['max_shear']:.3g}",
+            ]
+            for p, row in rows.items()
+        ],
     )
     report.text(
         "Below an infinite film normal load changes only |B| and shear only the angle, so Eq. 3 returns the "
@@ -592,15 +768,36 @@ def main(argv=None):
     report.result("shear_modulus_calibrated", g_calibrated)
     report.result("normal_pressure_sensitivity_hooke", normal_hooke)
     report.result("normal_pressure_sensitivity_bonded_face", bonded)
+    report.result(
+        "normal_sensitivity_c1",
+        {
+            "fraction_reading": normal_hooke / NORMAL_SENSITIVITY,
+            "percent_reading": normal_hooke / (NORMAL_SENSITIVITY / 100),
+        },
+    )
     report.result("shear_pressure_sensitivity", shear_hooke)
     report.result("field_fraction_published_design", published_design["field_fraction"])
     report.result("shear_phase_16kPa_published_design", published_design["shear_phase_max"])
     report.result("eq1_printed_over_corrected", printed / ours)
-    report.result("design", {"status": result.status, "period": solved_t, "layer_thickness": solved_h,
-                             "outputs": result.outputs, "steps": result.steps})
-    report.result("decoupling", {"infinite" if p is None else f"periods_{p}": {
-        key: row[key] for key in ("magnitude_coupling", "angle_coupling", "rmse_normal", "rmse_shear")}
-        for p, row in rows.items()})
+    report.result(
+        "design",
+        {
+            "status": result.status,
+            "period": solved_t,
+            "layer_thickness": solved_h,
+            "outputs": result.outputs,
+            "steps": result.steps,
+        },
+    )
+    report.result(
+        "decoupling",
+        {
+            "infinite" if p is None else f"periods_{p}": {
+                key: row[key] for key in ("magnitude_coupling", "angle_coupling", "rmse_normal", "rmse_shear")
+            }
+            for p, row in rows.items()
+        },
+    )
     report.write()
 
 

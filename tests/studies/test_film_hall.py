@@ -1,4 +1,4 @@
-"""The seed-004 study in quick mode, checked against the paper's published numbers
+"""The film-Hall study in quick mode, checked against the paper's published numbers
 (Yan et al., Sci. Robot. 6, eabc8801 (2021); sections as in the study's comments)."""
 
 import math
@@ -6,7 +6,7 @@ import math
 import pytest
 from study_runner import assert_opens_with
 
-NAME = "seed004_film_hall"
+NAME = "film_hall"
 mm, kPa = 1e-3, 1e3
 # every published number issue 12 lists for this sensor, as the first table prints it
 # (attenuation distances, balance periods, the published T and h the solve is set beside)
@@ -40,6 +40,17 @@ def test_normal_sensitivity_bonded_face(results):
     assert results["normal_pressure_sensitivity_bonded_face"] == pytest.approx(0.01 / kPa, rel=0.25)
 
 
+def test_normal_sensitivity_readings(results):
+    # one cell on the Hooke layer: d ln|B| / dP = k h / E = (2 pi / 6 mm)(3.5 mm) / 83 kPa (by hand);
+    # the report reads the published 0.01 kPa^-1 as a fraction of B per kPa, so Eq. 3's c1 is
+    # 4.42, and as 0.01 %/kPa it would be 442 (the report's "times below the model")
+    k_h_over_e = (2 * math.pi / 6.0) * 3.5 / 83.0 / kPa
+    assert results["normal_pressure_sensitivity_hooke"] == pytest.approx(k_h_over_e, rel=1e-6)
+    c1 = results["normal_sensitivity_c1"]
+    assert c1["fraction_reading"] == pytest.approx(k_h_over_e / (0.01 / kPa), rel=1e-6)
+    assert c1["percent_reading"] == pytest.approx(k_h_over_e / (1e-4 / kPa), rel=1e-6)
+
+
 def test_design_solve_meets_the_two_percent_rule(results):
     design = results["design"]
     assert design["status"] == "successful"
@@ -57,5 +68,5 @@ def test_decoupling(results):
 
 
 def test_printed_eq1_is_e_to_the_kd_too_large(results):
-    # PHYSICS.md 1.2: the paper's Eq. 1 with z from the bottom face is e^{kd} too large
+    # the paper's Eq. 1 with z from the bottom face is e^{kd} too large
     assert results["eq1_printed_over_corrected"] == pytest.approx(math.exp(2 * math.pi * 0.5 / 6.0), rel=1e-12)
