@@ -13,7 +13,7 @@ Prints:
   and the compiled program's size (fusions: XLA compiles each into a kernel of its own);
 - a vmapped batch of 10,000 target compliances at the Reissner level, and the same
   10,000 designs solved the usual way without magdesign: scipy's brentq on the same closed
-  forms (Reissner's dome compliance for the wall, seed 001 Eq. 1 on the axis for the gap
+  forms (Reissner's dome compliance for the wall, the dome-Hall paper's Eq. 1 on the axis for the gap
   where the field limit is active), with the largest difference between the two answers;
 - the QP subproblem of the solver's first step on the default design and on hs071,
   solved by magdesign's interior-point method, by what the solver runs (active-set rounds
@@ -135,8 +135,9 @@ def fresh_process_rows():
     with tempfile.TemporaryDirectory() as cache:
         env = {**os.environ, "MAGDESIGN_CACHE_DIR": cache, "MAGDESIGN_NO_CACHE": ""}
         for run in range(4):
-            out = subprocess.run([sys.executable, "-c", FRESH_PROCESS], env=env, capture_output=True, text=True,
-                                 check=True)
+            out = subprocess.run(
+                [sys.executable, "-c", FRESH_PROCESS], env=env, capture_output=True, text=True, check=True
+            )
             seconds, status = out.stdout.split()
             rows.append(("empty cache" if run == 0 else f"cache kept, run {run}", f"{float(seconds):.2f}", status))
     table(rows)
@@ -182,10 +183,18 @@ def design_rows(skip_axisymmetric):
     table(
         [
             ("10,000 compliances", "time (s)", "per design (us)", "note"),
-            ("magdesign sweep (vmap)", f"{batch.seconds:.3f}", f"{batch.seconds / BATCH * 1e6:.1f}",
-             f"first call {first_s:.1f} s; {batch.successful.mean() * 100:.1f} % successful"),
-            ("scipy brentq, same closed forms", f"{scipy_s:.3f}", f"{scipy_s / BATCH * 1e6:.1f}",
-             f"ratio scipy / magdesign {scipy_s / batch.seconds:.1f}"),
+            (
+                "magdesign sweep (vmap)",
+                f"{batch.seconds:.3f}",
+                f"{batch.seconds / BATCH * 1e6:.1f}",
+                f"first call {first_s:.1f} s; {batch.successful.mean() * 100:.1f} % successful",
+            ),
+            (
+                "scipy brentq, same closed forms",
+                f"{scipy_s:.3f}",
+                f"{scipy_s / BATCH * 1e6:.1f}",
+                f"ratio scipy / magdesign {scipy_s / batch.seconds:.1f}",
+            ),
         ]
     )
     gap_error = np.max(np.abs(gaps / batch.parameters["geometry.gap"] - 1))
@@ -200,8 +209,15 @@ def first_subproblem(problem):
     jet = solver._jet(problem, jnp.asarray(y0), jnp.asarray(theta))
     weight = 1.0 / float(jnp.linalg.norm(jet.J[0])) if problem.objective is not None else 1.0
     m = jet.v.shape[0] - 1
-    return solver.subproblem(jet, jnp.asarray(y0), jnp.asarray(y_max), jnp.zeros(m), weight, len(problem.targets),
-                             problem.objective is not None)
+    return solver.subproblem(
+        jet,
+        jnp.asarray(y0),
+        jnp.asarray(y_max),
+        jnp.zeros(m),
+        weight,
+        len(problem.targets),
+        problem.objective is not None,
+    )
 
 
 def exact_qp(Q, q, A, b, G, h, active):
@@ -235,8 +251,16 @@ def qp_rows():
         reference = exact_qp(Q, q, A, b, G, h, active)
         seconds = median_time(lambda: ours(Q, q, A, b, G, h))
         error = float(jnp.max(jnp.abs(solution.w - reference)))
-        rows.append((name, "magdesign interior point", f"{seconds * 1e3:.2f}", int(solution.iterations), f"{error:.1e}",
-                     "reference"))
+        rows.append(
+            (
+                name,
+                "magdesign interior point",
+                f"{seconds * 1e3:.2f}",
+                int(solution.iterations),
+                f"{error:.1e}",
+                "reference",
+            )
+        )
         # What the solver runs: active-set rounds from its first-step guess, the interior
         # point method only where they fail (iterations > 0).
         n, n_targets = len(problem.variables), len(problem.targets)
@@ -246,22 +270,40 @@ def qp_rows():
         solution = guessed(Q, q, A, b, G, h)
         seconds = median_time(lambda: guessed(Q, q, A, b, G, h))
         same = bool(np.all((np.asarray(solution.z) > 1e-8) == active))
-        rows.append(("", "magdesign active set, then IP", f"{seconds * 1e3:.2f}", int(solution.iterations),
-                     f"{float(jnp.max(jnp.abs(solution.w - reference))):.1e}", "right" if same else "wrong"))
+        rows.append(
+            (
+                "",
+                "magdesign active set, then IP",
+                f"{seconds * 1e3:.2f}",
+                int(solution.iterations),
+                f"{float(jnp.max(jnp.abs(solution.w - reference))):.1e}",
+                "right" if same else "wrong",
+            )
+        )
         stacked = jnp.concatenate([A, G])
         lower_rows = jnp.concatenate([b, jnp.full(G.shape[0], -jnp.inf)])
         upper_rows = jnp.concatenate([b, h])
         for tol, maxiter in ((1e-3, 4000), (1e-6, 100_000), (1e-10, 100_000)):
             osqp = jaxopt.BoxOSQP(tol=tol, maxiter=maxiter, jit=True)
-            run = jax.jit(lambda Q=Q, q=q: osqp.run(params_obj=(Q, q), params_eq=stacked, params_ineq=(lower_rows, upper_rows)))
+            run = jax.jit(
+                lambda Q=Q, q=q: osqp.run(params_obj=(Q, q), params_eq=stacked, params_ineq=(lower_rows, upper_rows))
+            )
             out = run()
             seconds = median_time(run, repeats=5)
             w = out.params.primal[0]
             # BoxOSQP's dual of the rows A x = z: positive where an upper bound is active.
-            z_osqp = np.asarray(out.params.dual_eq)[A.shape[0]:]
+            z_osqp = np.asarray(out.params.dual_eq)[A.shape[0] :]
             same = bool(np.all((z_osqp > 1e-8) == active))
-            rows.append(("", f"jaxopt BoxOSQP tol {tol:g}", f"{seconds * 1e3:.2f}", int(out.state.iter_num),
-                         f"{float(jnp.max(jnp.abs(w - reference))):.1e}", "right" if same else "wrong"))
+            rows.append(
+                (
+                    "",
+                    f"jaxopt BoxOSQP tol {tol:g}",
+                    f"{seconds * 1e3:.2f}",
+                    int(out.state.iter_num),
+                    f"{float(jnp.max(jnp.abs(w - reference))):.1e}",
+                    "right" if same else "wrong",
+                )
+            )
     table(rows)
 
 

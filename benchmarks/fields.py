@@ -2,7 +2,7 @@
 
 Run by hand: .venv/bin/python benchmarks/fields.py   (taskset -c 1 ... for one core)
 
-Prints, for the seed-001 magnet (3 x 1 mm) and random points in a box of +-10 radii:
+Prints, for the dome-Hall sensor's magnet (3 x 1 mm) and random points in a box of +-10 radii:
 - the first call (trace + compile + run of a fresh jitted function, 1000 points), axial
   and with a diametral part; target <= 1 s;
 - points per second (float64, jitted, warm; best of 7-9 interleaved repeats) of magdesign
@@ -66,7 +66,9 @@ def main():
             device_points = jax.device_put(points)
             field(device_points).block_until_ready()
             repeats = 9 if n <= 10**5 else 7
-            ours, theirs = _best_times([lambda: field(device_points).block_until_ready(), lambda: magnet.getB(points)], repeats)
+            ours, theirs = _best_times(
+                [lambda: field(device_points).block_until_ready(), lambda: magnet.getB(points)], repeats
+            )
             ours_b, theirs_b = np.asarray(field(device_points)), magnet.getB(points)
             diff = np.max(np.linalg.norm(ours_b - theirs_b, axis=-1) / np.linalg.norm(theirs_b, axis=-1))
             print(f"{name:>9} {n:>9} {n / ours:>11.3g} {n / theirs:>10.3g} {theirs / ours:>6.2f} {diff:>13.1e}")
@@ -80,8 +82,12 @@ def main():
             field(points).block_until_ready()
             jacobian(points).block_until_ready()
             repeats = 9 if n <= 10**5 else 7
-            value, derivative = _best_times([lambda: field(points).block_until_ready(), lambda: jacobian(points).block_until_ready()], repeats)
-            print(f"{name:>9} {n:>9}: field {value * 1e3:7.1f} ms, jacobian {derivative * 1e3:7.1f} ms, ratio {derivative / value:.2f}")
+            value, derivative = _best_times(
+                [lambda: field(points).block_until_ready(), lambda: jacobian(points).block_until_ready()], repeats
+            )
+            print(
+                f"{name:>9} {n:>9}: field {value * 1e3:7.1f} ms, jacobian {derivative * 1e3:7.1f} ms, ratio {derivative / value:.2f}"
+            )
 
 
 if __name__ == "__main__":

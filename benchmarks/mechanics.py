@@ -2,7 +2,7 @@
 ``taskset -c 0 python benchmarks/mechanics.py``; pinning to one core steadies the timings).
 
 Prints
-1. mesh convergence of the axisymmetric level: the seed-001 dome (R_o 8 mm, t 2 mm, 5 N)
+1. mesh convergence of the axisymmetric level: the dome-Hall sensor's dome (R_o 8 mm, t 2 mm, 5 N)
    and a thin dome (R_o 8 mm, t 0.4 mm, t/R 0.05, travel t/10) against the refined mesh
    REFERENCE_MESH, with the best warm time of one jitted call per mesh;
 2. the cost of calls: Reissner and the axisymmetric 5 N path (jitted, warm), its gradient
@@ -49,41 +49,54 @@ def _first_and_best(fn, *args, repeats=REPEATS):
     return first, best, out
 
 
-def seed_compliance(mesh):
-    """Jitted seed-001 compliance at 5 N (m/N) as a function of the wall thickness (m)."""
-    return jax.jit(lambda t: dome_compliance(outer_radius=8 * mm, thickness=t, material=RESIN, max_force=5.0, mesh=mesh))
+def dome_hall_compliance(mesh):
+    """Jitted dome-Hall compliance at 5 N (m/N) as a function of the wall thickness (m)."""
+    return jax.jit(
+        lambda t: dome_compliance(outer_radius=8 * mm, thickness=t, material=RESIN, max_force=5.0, mesh=mesh)
+    )
 
 
 def thin_force(mesh):
     """Jitted plate force (N) of the 8 / 0.4 mm dome at travel t/10, from its wall (m)."""
     return jax.jit(
-        lambda t: dome_curve(outer_radius=8 * mm, thickness=t, material=RESIN, travels=(t / 10)[None], mesh=mesh).force[0]
+        lambda t: dome_curve(outer_radius=8 * mm, thickness=t, material=RESIN, travels=(t / 10)[None], mesh=mesh).force[
+            0
+        ]
     )
 
 
 def mesh_convergence():
-    print("1. mesh convergence of the axisymmetric dome (error against the refined mesh "
-          f"{REFERENCE_MESH[0]}x{REFERENCE_MESH[1]}; default mesh {DEFAULT_MESH[0]}x{DEFAULT_MESH[1]})")
-    cases = (("seed 001, 8/2 mm, 5 N compliance", seed_compliance, 2 * mm, 1e3, "mm/N"),
-             ("thin, 8/0.4 mm, force at t/10", thin_force, 0.4 * mm, 1e3, "mN"))
+    print(
+        "1. mesh convergence of the axisymmetric dome (error against the refined mesh "
+        f"{REFERENCE_MESH[0]}x{REFERENCE_MESH[1]}; default mesh {DEFAULT_MESH[0]}x{DEFAULT_MESH[1]})"
+    )
+    cases = (
+        ("dome-Hall, 8/2 mm, 5 N compliance", dome_hall_compliance, 2 * mm, 1e3, "mm/N"),
+        ("thin, 8/0.4 mm, force at t/10", thin_force, 0.4 * mm, 1e3, "mN"),
+    )
     print(f"   {'case':<36}{'mesh':>7}{'value':>14}{'error':>11}{'warm (s)':>11}")
     for name, build, thickness, scale, unit in cases:
         t = jnp.asarray(thickness)
         _, reference_seconds, reference = _first_and_best(build(REFERENCE_MESH), t, repeats=1)
         reference = float(reference)
         for mesh in MESHES + (REFERENCE_MESH,):
-            _, warm, value = (None, reference_seconds, reference) if mesh == REFERENCE_MESH else _first_and_best(build(mesh), t)
+            _, warm, value = (
+                (None, reference_seconds, reference) if mesh == REFERENCE_MESH else _first_and_best(build(mesh), t)
+            )
             error = float(value) / reference - 1.0
-            print(f"   {name:<36}{mesh[0]}x{mesh[1]:<5}{float(value) * scale:>9.5f} {unit:<4}{error:>+11.2e}{warm:>11.3g}")
+            print(
+                f"   {name:<36}{mesh[0]}x{mesh[1]:<5}{float(value) * scale:>9.5f} {unit:<4}{error:>+11.2e}{warm:>11.3g}"
+            )
 
 
 def call_costs():
-    print("\n2. cost of one call (seed-001 dome, 5 N, default mesh)")
+    print("\n2. cost of one call (dome-Hall dome, 5 N, default mesh)")
     args = tuple(jnp.asarray(a) for a in (8 * mm, 2 * mm, RESIN.c10, RESIN.c01))
 
     def compliance(Ro, t, c10, c01, fidelity):
-        return dome_compliance(outer_radius=Ro, thickness=t, material=MooneyRivlin(c10=c10, c01=c01),
-                               max_force=5.0, fidelity=fidelity)
+        return dome_compliance(
+            outer_radius=Ro, thickness=t, material=MooneyRivlin(c10=c10, c01=c01), max_force=5.0, fidelity=fidelity
+        )
 
     print(f"   {'call':<44}{'first (s)':>12}{'warm (s)':>12}")
     for fidelity in ("reissner", "axisymmetric"):
@@ -121,7 +134,7 @@ def default_design():
 
 
 def factor_costs(loops=50):
-    print("\n4. one factor and solve of the tangent (seed-001 dome, plate 0.2 mm in, force held)")
+    print("\n4. one factor and solve of the tangent (dome-Hall dome, plate 0.2 mm in, force held)")
     print(f"   {'mesh':<8}{'unknowns':>10}{'dense (ms)':>12}{'blocks (ms)':>13}{'difference':>12}")
     params = (jnp.asarray(8 * mm), jnp.asarray(2 * mm), RESIN)
     for shape in ((1, 12), DEFAULT_MESH, (4, 32)):
@@ -136,14 +149,19 @@ def factor_costs(loops=50):
         seconds, answers = {}, {}
         for name, one in solvers.items():
             # a loop of solves whose matrix and right side change, so none is hoisted
-            looped = jax.jit(lambda A, r, one=one: lax.fori_loop(
-                0, loops, lambda i, x: one(A + 1e-12 * i * jnp.eye(A.shape[0]), r + 1e-12 * x), r))
+            looped = jax.jit(
+                lambda A, r, one=one: lax.fori_loop(
+                    0, loops, lambda i, x: one(A + 1e-12 * i * jnp.eye(A.shape[0]), r + 1e-12 * x), r
+                )
+            )
             _, best, _ = _first_and_best(looped, M, rhs)
             seconds[name] = best / loops
             answers[name] = one(M, rhs)
         difference = float(jnp.max(jnp.abs(answers["blocks"] - answers["dense"])) / jnp.max(jnp.abs(answers["dense"])))
-        print(f"   {shape[0]}x{shape[1]:<6}{mesh.size:>10}{seconds['dense'] * 1e3:>12.3f}"
-              f"{seconds['blocks'] * 1e3:>13.3f}{difference:>12.1e}")
+        print(
+            f"   {shape[0]}x{shape[1]:<6}{mesh.size:>10}{seconds['dense'] * 1e3:>12.3f}"
+            f"{seconds['blocks'] * 1e3:>13.3f}{difference:>12.1e}"
+        )
 
 
 if __name__ == "__main__":

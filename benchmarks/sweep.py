@@ -45,8 +45,10 @@ def child(devices, points, fidelity, cores):
         over = {"compliance": np.linspace(0.25, 0.4, points) * mm}
     else:
         side = int(round(np.sqrt(points)))
-        over = {"mechanics.outer_radius": np.linspace(6.0, 10.0, side) * mm,
-                "compliance": np.linspace(0.25, 0.4, points // side) * mm}
+        over = {
+            "mechanics.outer_radius": np.linspace(6.0, 10.0, side) * mm,
+            "compliance": np.linspace(0.25, 0.4, points // side) * mm,
+        }
     began = time.perf_counter()
     first = sweep(problem, over, progress=False)
     first_s = time.perf_counter() - began
@@ -54,11 +56,19 @@ def child(devices, points, fidelity, cores):
     began = time.perf_counter()
     warm = sweep(problem, over, progress=False)
     warm_s = time.perf_counter() - began
-    print(json.dumps({
-        "device": str(jax.devices()[0].device_kind), "points": int(warm.status.size), "first_s": first_s, "warm_s": warm_s,
-        "successful": int(warm.successful.sum()), "agree": bool(np.array_equal(first.status, warm.status)),
-        "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-    }))
+    print(
+        json.dumps(
+            {
+                "device": str(jax.devices()[0].device_kind),
+                "points": int(warm.status.size),
+                "first_s": first_s,
+                "warm_s": warm_s,
+                "successful": int(warm.successful.sum()),
+                "agree": bool(np.array_equal(first.status, warm.status)),
+                "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+            }
+        )
+    )
 
 
 def measure(devices, points, fidelity="reissner", cores=None):
@@ -86,8 +96,19 @@ def main():
     if args.child:
         return child(args.child, args.points, args.fidelity, args.cores)
 
-    rows = [("sweep", "devices", "cores", "points", "successful", "first call (s)", "warm (s)", "solves/s",
-             "peak memory (MB)")]
+    rows = [
+        (
+            "sweep",
+            "devices",
+            "cores",
+            "points",
+            "successful",
+            "first call (s)",
+            "warm (s)",
+            "solves/s",
+            "peak memory (MB)",
+        )
+    ]
     results = {}
     from magdesign.design.solve import usable_cores  # here: a child sets its cores before JAX loads
 
@@ -98,19 +119,34 @@ def main():
     runs += [(2, 1_000_000, "reissner", None)] if args.million else []
     runs += [] if args.skip_axisymmetric else [(1, 200, "axisymmetric", None)]
     for devices, points, fidelity, cores in runs:
-        print(f"measuring {points} points at {fidelity} on {devices} device(s), {cores or all_cores} core(s) ...",
-              file=sys.stderr, flush=True)
+        print(
+            f"measuring {points} points at {fidelity} on {devices} device(s), {cores or all_cores} core(s) ...",
+            file=sys.stderr,
+            flush=True,
+        )
         r = results[devices, points, fidelity, cores] = measure(devices, points, fidelity, cores)
-        rows.append((f"default design, {fidelity}", devices, cores or all_cores, r["points"], r["successful"],
-                     f"{r['first_s']:.2f}", f"{r['warm_s']:.2f}", f"{r['points'] / r['warm_s']:.0f}",
-                     f"{r['peak_mb']:.0f}"))
+        rows.append(
+            (
+                f"default design, {fidelity}",
+                devices,
+                cores or all_cores,
+                r["points"],
+                r["successful"],
+                f"{r['first_s']:.2f}",
+                f"{r['warm_s']:.2f}",
+                f"{r['points'] / r['warm_s']:.0f}",
+                f"{r['peak_mb']:.0f}",
+            )
+        )
     table(rows)
     one, two = results[1, args.points, "reissner", None], results[2, args.points, "reissner", None]
     print(f"\n2 host devices against 1: {one['warm_s'] / two['warm_s']:.2f}x (warm)")
     if half:
         held = results[1, args.points, "reissner", half]
-        print(f"one device on {all_cores} cores against {half}: {held['warm_s'] / one['warm_s']:.2f}x; "
-              f"so 2 devices can gain at most {2 * one['warm_s'] / held['warm_s']:.2f}x over one")
+        print(
+            f"one device on {all_cores} cores against {half}: {held['warm_s'] / one['warm_s']:.2f}x; "
+            f"so 2 devices can gain at most {2 * one['warm_s'] / held['warm_s']:.2f}x over one"
+        )
 
 
 if __name__ == "__main__":

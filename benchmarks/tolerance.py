@@ -5,7 +5,7 @@
 Prints, for 100,000 samples (or N):
 - the Monte Carlo of the default design (magdesign/design/default.toml, solved first) with
   tolerances on its remanence (2 %), its dome's moduli (5 % each) and its temperature (10 K):
-  the default scene as it is (the field on the axis, seed 001 Eq. 1);
+  the default scene as it is (the field on the axis, the dome-Hall paper's Eq. 1);
 - the same for examples/dome_hall_tolerances.toml, whose placement (50 um) and tilt (2 deg)
   tolerances move the sensor off the axis: its samples read the exact field;
 each as the first call (tracing and compiling included) and the median of 3 warm calls,
@@ -46,20 +46,43 @@ def table(rows):
 
 def main():
     spec = default_spec()
-    spec["design"]["tolerances"] = {"magnet.remanence": "2 %", "mechanics.c10": "5 %", "mechanics.c01": "5 %",
-                                    "temperature": "10 K"}
+    spec["design"]["tolerances"] = {
+        "magnet.remanence": "2 %",
+        "mechanics.c10": "5 %",
+        "mechanics.c01": "5 %",
+        "temperature": "10 K",
+    }
     with open("examples/dome_hall_tolerances.toml", "rb") as file:
         example = tomllib.load(file)
     rows = [("case", "samples", "first call (s)", "warm (s)", "warm samples/s", "yield")]
-    for name, case in (("default scene (field on the axis)", spec), ("example, placement + tilt (exact field)", example)):
+    for name, case in (
+        ("default scene (field on the axis)", spec),
+        ("example, placement + tilt (exact field)", example),
+    ):
         tp = tolerance_problem_from_spec(case)
         design = solve(tp.problem)
         first, warm, result = timed(lambda: monte_carlo(tp, design.parameters, samples=SAMPLES, progress=False))
-        rows.append((f"Monte Carlo, {name}", SAMPLES, f"{first:.3g}", f"{warm:.3g}", f"{SAMPLES / warm:.3g}",
-                     f"{100 * result.yield_fraction:.4g} %"))
+        rows.append(
+            (
+                f"Monte Carlo, {name}",
+                SAMPLES,
+                f"{first:.3g}",
+                f"{warm:.3g}",
+                f"{SAMPLES / warm:.3g}",
+                f"{100 * result.yield_fraction:.4g} %",
+            )
+        )
     first, warm, robust = timed(lambda: robust_solve(tp, 2.0, start=design.parameters))
-    rows.append((f"robust solve of the example, k = 2 ({robust.status}, {robust.rounds} rounds; its programs compiled above)", "", f"{first:.3g}",
-                 f"{warm:.3g}", "", ""))
+    rows.append(
+        (
+            f"robust solve of the example, k = 2 ({robust.status}, {robust.rounds} rounds; its programs compiled above)",
+            "",
+            f"{first:.3g}",
+            f"{warm:.3g}",
+            "",
+            "",
+        )
+    )
     table(rows)
 
 

@@ -5,6 +5,8 @@ float64 mode (``jax_enable_x64``): every function computes in float64 unless it 
 handed float32 arrays explicitly.
 """
 
+import importlib.metadata
+
 import jax
 
 jax.config.update("jax_enable_x64", True)
@@ -14,4 +16,4 @@ from magdesign import mechanics as mechanics  # noqa: E402
 from magdesign import transducers as transducers  # noqa: E402
 from magdesign import units as units  # noqa: E402
 
-__version__ = "0.1.0"
+__version__ = importlib.metadata.version("magdesign")  # from the installed distribution's metadata

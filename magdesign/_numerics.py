@@ -69,6 +69,9 @@ def safe_log(x, at_zero=0.0):
 DESIGN_RTOL = 1e-10
 # Default step tolerance in scaled variables: a converged step in a [0, 1] box.
 DESIGN_ATOL = 1e-13
+# A chip's saturation_ratio counts as clipping above 1 + CLIP_RTOL: a design held at its chip's
+# range reads 1 to the design solver's tolerance (DESIGN_RTOL), far below this.
+CLIP_RTOL = 1e-6
 # Designs solved per compiled batch of a sweep: bounds its memory (the Reissner-level default
 # design takes about 1 kB per point) while keeping the per-call overhead small.
 DESIGN_CHUNK = 4096
@@ -204,16 +207,16 @@ FD_JACOBIAN_STEP = 1e-2
 
 # Solver thresholds of the axisymmetric dome (magdesign.mechanics._axisymmetric).
 # A state is in equilibrium when its largest out-of-balance nodal force is below this
-# fraction of mu t^2 (the wall's own force scale, 2.4 N for seed 001's dome): Newton
+# fraction of mu t^2 (the wall's own force scale, 2.4 N for the dome-Hall sensor's dome): Newton
 # converges quadratically there, so the state it leaves is exact to float64 rounding, and
 # the tolerance stays above the rounding of the contact forces (the penalty times ~1e-18 m)
-# and, for walls thicker than ~0.2 mm of seed 001's resin, of the wall's forces (see
+# and, for walls thicker than ~0.2 mm of the dome-Hall sensor's resin, of the wall's forces (see
 # DOME_ROUNDING_SLACK for thinner ones).
 DOME_RESIDUAL_TOL = 1e-10
 # Float64 rounding of the wall's nodal forces leaves a floor of about eps K R_o^2 theta^2
 # (K the bulk modulus, theta the wall's rotation: the volume change J - 1 is a small
 # difference of rotation terms), measured 2e-12 N at rotations of order one whatever the
-# wall, which is the tolerance itself for a 0.2 mm wall of seed 001's resin. A state within
+# wall, which is the tolerance itself for a 0.2 mm wall of the dome-Hall sensor's resin. A state within
 # this many tolerances, whose Newton step no longer halves its out-of-balance force,
 # sits on that floor and counts as converged.
 DOME_ROUNDING_SLACK = 100.0
@@ -242,7 +245,7 @@ DOME_LEVENBERG_START = 1e-6
 # rounding (1e-16 / 1e-6 = 1e-10) errors both far below the 1e-6 it is asked to recover.
 FD_CALIBRATION_STEP = 1e-6
 
-# Seed 000's moments level: the tilt step (rad) of its five-point central differences (the
+# The magnetic-suspension pole's moments level: the tilt step (rad) of its five-point central differences (the
 # spring coefficient and the field sensitivity at theta = 0). Truncation ~ step^4 times a
 # fifth / sixth tilt derivative: the GMR's field, 0.58 mm from the rod's tip, varies
 # fastest; at 0.02 rad its sensitivity was 1.7e-4 off, at 0.005 rad below 1e-6 (against

@@ -1,8 +1,8 @@
 """The ``magdesign`` command (also ``python -m magdesign``).
 
-    magdesign solve [SPEC.toml] [--json] [--fidelity LEVEL] [--plot FILE] [--timing]
+    magdesign solve [SPEC.toml] [--json] [--fidelity LEVEL] [--plot FILE] [--write FILE] [--timing]
     magdesign simulate SPEC.toml [--json]
-    magdesign accuracy [--json] [--plot FILE]
+    magdesign accuracy [--quick] [--json] [--plot FILE]
     magdesign show SPEC.toml --plot FILE
     magdesign tolerance SPEC.toml [--samples N] [--json] [--plot FILE] [--robust K] [--seed S] [--quiet]
     magdesign sweep SPEC.toml --over KEY=LO:HI:N [--over ...] | --points CSV [--json] [--csv FILE]
@@ -27,6 +27,7 @@ import math
 import os
 import platform
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -36,14 +37,29 @@ import numpy as np
 from magdesign import accuracy
 from magdesign.design import solve as solve_problem
 from magdesign.design import sweep as sweep_problem
+from magdesign.design import tolerance as tolerance_analysis
 from magdesign.design.plot import plot_design, plot_sweep
 from magdesign.design.report import format_quantity
-from magdesign.design import tolerance as tolerance_analysis
-from magdesign.design.spec import (default_spec, exact_levels, fidelity_levels, input_units, load_spec,
-                                   problem_from_spec)
-from magdesign.scene import (loads_from_spec, scene_from_spec, simulate, simulation_json, simulation_table,
-                             with_parameters)
+from magdesign.design.spec import (
+    default_spec,
+    exact_levels,
+    fidelity_levels,
+    input_units,
+    load_spec,
+    problem_from_spec,
+    stated_value,
+)
+from magdesign.scene import (
+    loads_from_spec,
+    scene_from_spec,
+    simulate,
+    simulation_json,
+    simulation_table,
+    with_parameters,
+)
+from magdesign.scene.core import warn_if_clipping
 from magdesign.scene.picture import plot_scene
+from magdesign.spec.keys import KEYS, check_domain, spec_name
 from magdesign.units import SpecError, parse, written_unit
 
 EXIT_INTERNAL = 1
@@ -98,82 +114,140 @@ def use_compilation_cache(debug=False):
 def build_parser():
     debug = argparse.ArgumentParser(add_help=False)
     # Taken before or after the command; SUPPRESS keeps a command's default from hiding the first.
-    debug.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show the traceback of an internal error")
+    debug.add_argument(
+        "--debug", action="store_true", default=argparse.SUPPRESS, help="show the traceback of an internal error"
+    )
     parser = argparse.ArgumentParser(
         prog="magdesign",
         parents=[debug],
         description="Design magnetic tactile sensors by differentiable optimisation.",
         epilog="Exit codes: 0 done, 1 internal error, 2 bad spec or arguments, 3 not solved (or "
-        "mechanics not converged). Specs are TOML; see examples/ and the README.",
+        "mechanics not converged). Specs are TOML: every key, its unit, default and range is in "
+        "the spec reference (`python -m magdesign.spec.reference` prints it; also in the docs).",
     )
     parser.add_argument("--version", action="version", version=f"magdesign {importlib.metadata.version('magdesign')}")
     sub = parser.add_subparsers(dest="command", required=True)
     add_parser = lambda name, **kwargs: sub.add_parser(name, parents=[debug], **kwargs)  # noqa: E731
 
-    solve = add_parser("solve", help="solve a design spec (default: the seed-001 dome with a Hall sensor)")
+    solve = add_parser("solve", help="solve a design spec (default: the soft dome with a Hall sensor)")
     solve.add_argument("spec", nargs="?", help="design spec (TOML); the built-in default design if omitted")
     solve.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
-    solve.add_argument("--fidelity", default="auto",
-                       help="auto (default): solve at the spec's levels, then confirm from that answer with the "
-                       "exact dome (axisymmetric) and field (exact) models, and report both; or one mechanics "
-                       "level for every solve (e.g. reissner, axisymmetric)")
+    solve.add_argument(
+        "--fidelity",
+        default="auto",
+        help="auto (default): solve at the spec's levels, then confirm from that answer with the "
+        "exact dome (axisymmetric) and field (exact) models, and report both; or one mechanics "
+        "level for every solve (e.g. reissner, axisymmetric)",
+    )
     solve.add_argument("--plot", metavar="FILE", help="write a PNG of the targets and limits around the design")
-    solve.add_argument("--timing", action="store_true", help="solve the answer's problem again and report that warm time too")
+    solve.add_argument(
+        "--write",
+        metavar="FILE",
+        help="write the answer as a spec (TOML): the spec with the solved "
+        "values in its scene tables, at the answer's levels, for simulate and show",
+    )
+    solve.add_argument(
+        "--timing", action="store_true", help="solve the answer's problem again and report that warm time too"
+    )
 
     simulate_cmd = add_parser("simulate", help="run a scene's forward chain over its load sweep")
-    simulate_cmd.add_argument("spec", help="scene or design spec (TOML); a design spec simulates its start point "
-                              "(every [design.variables] entry at its start), then lists the design outputs")
+    simulate_cmd.add_argument(
+        "spec",
+        help="scene or design spec (TOML); a design spec simulates its scene as "
+        "written (a [design.variables] entry the scene does not state at its start), then "
+        "lists the design outputs",
+    )
     simulate_cmd.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
 
     accuracy_cmd = add_parser("accuracy", help="measure every model's error against its time, on this machine")
+    accuracy_cmd.add_argument(
+        "--quick",
+        action="store_true",
+        help="a cheaper tier, under a minute on 2 cores: 3 repeats; the dome at Reissner against "
+        "the default mesh 2x16 (in place of 4x32), the spheres at 4 cells across; no suspension "
+        "pole, no default design",
+    )
     accuracy_cmd.add_argument("--json", action="store_true", help="print a JSON list of rows instead of the table")
     accuracy_cmd.add_argument("--plot", metavar="FILE", help="write a PNG of error against time (log-log)")
 
     sweep_cmd = add_parser("sweep", help="solve a design spec at every point of a grid (or list) of its inputs")
     sweep_cmd.add_argument("spec", help="design spec (TOML)")
-    sweep_cmd.add_argument("--over", metavar="KEY=LO:HI:N", action="append", default=[],
-                           help="sweep KEY over N values from LO to HI (units as in specs, e.g. "
-                           "mechanics.outer_radius=6mm:10mm:5); repeat for a grid. KEY: a target (compliance), a limit "
-                           "bound (field_max.upper) or a scene parameter that is not a variable")
-    sweep_cmd.add_argument("--points", metavar="CSV", help="a CSV file of points instead of a grid: a header row of "
-                           "keys, then one row per point (quantities with units, or SI numbers)")
+    sweep_cmd.add_argument(
+        "--over",
+        metavar="KEY=LO:HI:N",
+        action="append",
+        default=[],
+        help="sweep KEY over N values from LO to HI (units as in specs, e.g. "
+        "mechanics.outer_radius=6mm:10mm:5); repeat for a grid. KEY: a target (compliance), a limit "
+        "bound (field_max.upper) or a scene parameter that is not a variable",
+    )
+    sweep_cmd.add_argument(
+        "--points",
+        metavar="CSV",
+        help="a CSV file of points instead of a grid: a header row of "
+        "keys, then one row per point (quantities with units, or SI numbers)",
+    )
     sweep_cmd.add_argument("--json", action="store_true", help="print one JSON object with every point")
     sweep_cmd.add_argument("--csv", metavar="FILE", help="write every point (SI) to a CSV file")
-    sweep_cmd.add_argument("--plot", metavar="FILE", help="write a PNG: curves with their derivatives (one key), "
-                           "maps with contours (two keys)")
-    sweep_cmd.add_argument("--fidelity", help="one mechanics level for every point (e.g. reissner, axisymmetric); "
-                           "default: the spec's")
+    sweep_cmd.add_argument(
+        "--plot",
+        metavar="FILE",
+        help="write a PNG: curves with their derivatives (one key), maps with contours (two keys)",
+    )
+    sweep_cmd.add_argument(
+        "--fidelity", help="one mechanics level for every point (e.g. reissner, axisymmetric); default: the spec's"
+    )
     sweep_cmd.add_argument("--quiet", action="store_true", help="no progress bar")
-    sweep_cmd.add_argument("--devices", type=int, metavar="N",
-                           help="split this machine's CPU into N XLA devices and the points over them (a model "
-                                "with slow loops of its own goes a point at a time on a thread per core instead, each "
-                                "started from the one before's predicted optimum)")
+    sweep_cmd.add_argument(
+        "--devices",
+        type=int,
+        metavar="N",
+        help="split this machine's CPU into N XLA devices and the points over them (a model "
+        "with slow loops of its own goes a point at a time on a thread per core instead, each "
+        "started from the one before's predicted optimum)",
+    )
     sweep_cmd.add_argument("--coordinator", metavar="HOST:PORT", help="jax.distributed: process 0's address")
     sweep_cmd.add_argument("--num-processes", type=int, metavar="N", help="jax.distributed: how many processes")
     sweep_cmd.add_argument("--process-id", type=int, metavar="I", help="jax.distributed: this process's index")
-    sweep_cmd.add_argument("--distributed", action="store_true",
-                           help="jax.distributed from the cluster's environment (SLURM, Open MPI, JAX_COORDINATOR_ADDRESS)")
+    sweep_cmd.add_argument(
+        "--distributed",
+        action="store_true",
+        help="jax.distributed from the cluster's environment (SLURM, Open MPI, JAX_COORDINATOR_ADDRESS)",
+    )
 
     show = add_parser("show", help="draw the sensor in its axial plane with its field, at rest and at the largest load")
-    show.add_argument("spec", help="scene or design spec (TOML); a design spec shows its start point")
+    show.add_argument("spec", help="scene or design spec (TOML); a design spec shows its scene as written")
     show.add_argument("--plot", metavar="FILE", required=True, help="the PNG to write")
 
-    tolerance = add_parser("tolerance", help="solve a design spec, then a Monte Carlo over its [design.tolerances]: "
-                           "each output's spread, the yield, the inputs that matter most")
+    tolerance = add_parser(
+        "tolerance",
+        help="solve a design spec, then a Monte Carlo over its [design.tolerances]: "
+        "each output's spread, the yield, the inputs that matter most",
+    )
     tolerance.add_argument("spec", help="design spec (TOML) with a [design.tolerances] table")
-    tolerance.add_argument("--samples", type=int, default=100_000, metavar="N", help="Monte Carlo samples (default 100000)")
+    tolerance.add_argument(
+        "--samples", type=int, default=100_000, metavar="N", help="Monte Carlo samples (default 100000)"
+    )
     tolerance.add_argument("--json", action="store_true", help="print one JSON object instead of the tables")
-    tolerance.add_argument("--plot", metavar="FILE", help="write a PNG of each target and limit output's histogram with its bounds")
-    tolerance.add_argument("--robust", type=float, metavar="K", help="also solve with every limit held at K first-order "
-                           "sigmas of its output, and give that design's Monte Carlo beside the nominal one")
+    tolerance.add_argument(
+        "--plot", metavar="FILE", help="write a PNG of each target and limit output's histogram with its bounds"
+    )
+    tolerance.add_argument(
+        "--robust",
+        type=float,
+        metavar="K",
+        help="also solve with every limit held at K first-order "
+        "sigmas of its output, and give that design's Monte Carlo beside the nominal one",
+    )
     tolerance.add_argument("--seed", type=int, default=0, metavar="S", help="PRNG seed of the samples (default 0)")
     tolerance.add_argument("--quiet", action="store_true", help="no progress bar or progress lines")
     return parser
 
 
 def scene_at_start(spec):
-    """(scene, {variable: start} (SI)): a design spec's scene with every [design.variables]
-    entry at its start; a scene spec's scene as written and {}."""
+    """(scene, {variable: start} (SI)): a design spec's scene as written, which is where its
+    variables start, with a variable the scene does not state at its start; a scene spec's
+    scene and {}."""
     if "design" not in spec:
         return scene_from_spec(spec), {}
     problem, scene = problem_from_spec(spec)
@@ -188,11 +262,34 @@ def run_show(args):
     return 0
 
 
+def _designed(spec, path):
+    """One line saying what a spec designs: its name ([design] name, else the file's stem),
+    magnet, mechanics and chip ("dome_hall: cylinder magnet, mooney_rivlin dome, AK8963
+    hall3d chip")."""
+    name = spec.get("design", {}).get("name") or (Path(path).stem if path else "the default design")
+    magnet, mechanics, sensor = (spec.get(table) or {} for table in ("magnet", "mechanics", "sensor"))
+    grid, positions = sensor.get("grid"), sensor.get("positions")
+    count = (
+        " x ".join(map(str, grid)) + " "
+        if isinstance(grid, list)
+        else f"{len(positions)} "
+        if isinstance(positions, list) and len(positions) > 1
+        else ""
+    )
+    chip = " ".join(str(part) for part in (sensor.get("preset"), sensor.get("model")) if part)
+    body = " ".join(str(part) for part in (mechanics.get("material"), mechanics.get("model")) if part)
+    parts = [f"{magnet.get('shape', '?')} magnet", body, f"{count}{chip} chip{'s' if count else ''}" if chip else ""]
+    return f"{name}: " + ", ".join(part for part in parts if part)
+
+
 def run_solve(args):
+    began = time.perf_counter()
     spec = load_spec(args.spec) if args.spec else default_spec()
     auto = args.fidelity in (None, "auto")
     problem, _ = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
-    levels = fidelity_levels(spec if auto else {**spec, "mechanics": {**spec.get("mechanics", {}), "fidelity": args.fidelity}})
+    levels = fidelity_levels(
+        spec if auto else {**spec, "mechanics": {**spec.get("mechanics", {}), "fidelity": args.fidelity}}
+    )
     _progress(args, f"solving at {levels}")
     first = solve_problem(problem)
     answers = [(levels, problem, first)]
@@ -205,7 +302,9 @@ def run_solve(args):
         exact_problem, _ = problem_from_spec(exact)
         confirming = fidelity_levels(exact)
         _progress(args, f"confirming at {confirming}, from that answer")
-        start = {v.name: min(max(first.parameters[v.name], float(v.lower)), float(v.upper)) for v in exact_problem.variables}
+        start = {
+            v.name: min(max(first.parameters[v.name], float(v.lower)), float(v.upper)) for v in exact_problem.variables
+        }
         confirmed = solve_problem(exact_problem, start=start)
         answers.append((confirming, exact_problem, confirmed))
     levels, problem, result = answers[-1]
@@ -217,20 +316,40 @@ def run_solve(args):
             document["first_level"] = {**cheap[2].to_json(), "fidelity": cheap[0]}
         if warm is not None:
             document["warm_seconds"] = warm.seconds
+        document["total_seconds"] = time.perf_counter() - began
         print(json_text(document))
     else:
+        print(_designed(spec, args.spec))
         for index, (name, _, answer) in enumerate(answers):
             role = "the answer" if index == len(answers) - 1 else "first answer, confirmed below"
             print(f"{name} ({role}):")
             print(answer.table())
-            print(f"   that solve took {answer.seconds:.3g} s (first call: tracing, and compiling or loading from the cache, included)\n")
+            print(
+                f"   that solve took {answer.seconds:.3g} s (first call: tracing, and compiling or loading from the cache, included)\n"
+            )
         if exact is not None:
             print(_difference(answers[0][2], result, answers[0][0], levels))
         if warm is not None:
             print(f"warm solve at {levels}: {warm.seconds * 1e3:.3g} ms")
+        print(f"total time: {time.perf_counter() - began:.3g} s")
+    if args.write:
+        _write_answer(args, result)
     if args.plot:
         plot_design(problem, result, args.plot)
     return 0 if result.status == "successful" else EXIT_NOT_SOLVED
+
+
+def _write_answer(args, result):
+    """--write: the answer as a spec; one line on stderr, not the file, when it has no
+    finite values to write."""
+    try:
+        result.write_spec(args.write)
+    except ValueError as error:
+        print(f"magdesign solve: --write {args.write}: not written: {error}", file=sys.stderr)
+        return
+    except OSError as error:
+        raise SpecError(f"--write {args.write}: cannot write ({error.strerror})") from None
+    print(f"wrote {args.write}", file=sys.stderr if args.json else sys.stdout)
 
 
 def _progress(args, message):
@@ -251,8 +370,10 @@ def _difference(cheap, exact, cheap_levels, exact_levels_name):
     lines = [f"the first answer ({cheap_levels}) against the answer ({exact_levels_name}):"]
     for name, value in exact.parameters.items():
         unit = exact.units.get(name)
-        lines.append(f"  {name:<24} {format_quantity(cheap.parameters[name], unit):<16} -> {format_quantity(value, unit):<16} "
-                     f"(difference {format_quantity(value - cheap.parameters[name], unit)})")
+        lines.append(
+            f"  {name:<24} {format_quantity(cheap.parameters[name], unit):<16} -> {format_quantity(value, unit):<16} "
+            f"(difference {format_quantity(value - cheap.parameters[name], unit)})"
+        )
     return "\n".join(lines)
 
 
@@ -273,8 +394,9 @@ def _start_devices(args):
         if args.process_id is not None and not 0 <= args.process_id < (args.num_processes or args.process_id + 1):
             raise SpecError(f"--process-id {args.process_id}: expected 0 to --num-processes - 1")
         jax.config.update("jax_cpu_collectives_implementation", "gloo")
-        jax.distributed.initialize(coordinator_address=args.coordinator, num_processes=args.num_processes,
-                                   process_id=args.process_id)
+        jax.distributed.initialize(
+            coordinator_address=args.coordinator, num_processes=args.num_processes, process_id=args.process_id
+        )
 
 
 def _sweep_points(args, units):
@@ -303,7 +425,7 @@ def _sweep_points(args, units):
             for key, cell in zip(keys, row):
                 si, _ = unit_of(key, f"--points {args.points}")
                 text = cell.strip()
-                values[key].append(parse(float(text) if _is_number(text) else text, si, key=f"--points line {number} {key}"))
+                values[key].append(_swept_value(text, si, key, f"--points line {number} {key}"))
         return values, {key: unit_of(key, "--points")[1] for key in keys}, False
     values, shown = {}, {}
     for item in args.over:
@@ -316,7 +438,7 @@ def _sweep_points(args, units):
         si, display = unit_of(key, where)
         if key in values:
             raise SpecError(f"{where}: {key} is swept twice")
-        low, high = (parse(float(t) if _is_number(t) else t.strip(), si, key=f"--over {key}") for t in parts[:2])
+        low, high = (_swept_value(t, si, key, f"--over {key}") for t in parts[:2])
         try:
             count = int(parts[2])
         except ValueError:
@@ -328,6 +450,16 @@ def _sweep_points(args, units):
         values[key] = np.linspace(low, high, count)
         shown[key] = written_unit(parts[0].strip()) or display
     return values, shown, True
+
+
+def _swept_value(text, si, key, where):
+    """One swept value of ``key`` (SI), read as a spec value: a scene parameter's is checked
+    as the spec's would be (its physical domain; a warning for an implausible plain number)."""
+    written = float(text) if _is_number(text) else text.strip()
+    value = parse(written, si, key=where)
+    if spec_name(key) in KEYS:
+        check_domain(key, value, key=where, unit=si, written=written)
+    return value
 
 
 def _is_number(text):
@@ -348,8 +480,13 @@ def run_sweep(args):
     if args.plot and len(values) > 2:
         raise SpecError("--plot: a picture shows 1 or 2 swept keys (curves or maps)")
     try:
-        result = sweep_problem(problem, values, grid=grid, progress=False if args.quiet or args.json else None,
-                               over_units={k: None if u == "1" else u for k, u in shown.items()})
+        result = sweep_problem(
+            problem,
+            values,
+            grid=grid,
+            progress=False if args.quiet or args.json else None,
+            over_units={k: None if u == "1" else u for k, u in shown.items()},
+        )
     except ValueError as error:
         raise SpecError(str(error)) from None
     if jax.process_index() != 0:  # every process holds the merged result; the first one writes it
@@ -357,9 +494,19 @@ def run_sweep(args):
     if args.csv:
         result.write_csv(args.csv)
     if args.json:
-        print(json_text({"over": list(result.over), "shape": list(result.shape), "grid": grid,
-                         "status_counts": result.status_counts(), "seconds": result.seconds,
-                         "units": {k: v for k, v in result.units.items() if v}, "points": result.records()}))
+        print(
+            json_text(
+                {
+                    "over": list(result.over),
+                    "shape": list(result.shape),
+                    "grid": grid,
+                    "status_counts": result.status_counts(),
+                    "seconds": result.seconds,
+                    "units": {k: v for k, v in result.units.items() if v},
+                    "points": result.records(),
+                }
+            )
+        )
     else:
         if result.status.size <= SWEEP_TABLE_ROWS:
             print(result.table())
@@ -374,19 +521,31 @@ def run_simulate(args):
     scene, start = scene_at_start(spec)
     loads = loads_from_spec(spec)
     result = simulate(scene, loads, key=jax.random.key(0))
+    warn_if_clipping(scene, result)
     # the outputs read no reading after the reading effects: the noisy simulation gives them too
     values = {name: float(value) for name, value in scene.outputs(result).items()}
     if args.json:
-        print(json_text({**simulation_json(result), "start": start, "outputs": values,
-                         "output_units": scene.output_units}))
+        print(
+            json_text(
+                {**simulation_json(result), "start": start, "outputs": values, "output_units": scene.output_units}
+            )
+        )
     else:
-        if start:
-            shown = ", ".join(f"{name} = {value:.6g}" for name, value in start.items())
-            print(f"a design spec: simulating its start point ({shown}, SI)")
+        unstated = {name: value for name, value in start.items() if stated_value(spec, name) is None}
+        if unstated:
+            shown = ", ".join(f"{name} = {value:.6g}" for name, value in unstated.items())
+            print(
+                f"a design spec: its scene as written, with the variables it does not state at their start ({shown}, SI)"
+            )
         print(simulation_table(result))
-        print("outputs (docs/outputs.md): " + ", ".join(
-            f"{name} = {value:.6g} {scene.output_units.get(name, '1').removeprefix('1')}".rstrip()
-            for name, value in values.items() if math.isfinite(value)))
+        print(
+            "outputs (docs/outputs.md): "
+            + ", ".join(
+                f"{name} = {value:.6g} {scene.output_units.get(name, '1').removeprefix('1')}".rstrip()
+                for name, value in values.items()
+                if math.isfinite(value)
+            )
+        )
     return 0 if bool(result.converged.all()) else EXIT_NOT_SOLVED
 
 
@@ -406,11 +565,14 @@ def run_tolerance(args):
 
     def analyse(result, what):
         if not result.successful:
-            print(f"magdesign tolerance: the {what} solve ended {result.status}: analysing its end point anyway",
-                  file=sys.stderr)
+            print(
+                f"magdesign tolerance: the {what} solve ended {result.status}: analysing its end point anyway",
+                file=sys.stderr,
+            )
         note(f"Monte Carlo of the {what} design, {args.samples} samples")
-        return tolerance_analysis.monte_carlo(tp, result.parameters, samples=args.samples, seed=args.seed,
-                                              progress=False if args.quiet else None)
+        return tolerance_analysis.monte_carlo(
+            tp, result.parameters, samples=args.samples, seed=args.seed, progress=False if args.quiet else None
+        )
 
     note(f"solving at {levels}")
     nominal = solve_problem(tp.problem)
@@ -420,9 +582,14 @@ def run_tolerance(args):
         robust = tolerance_analysis.robust_solve(tp, args.robust, start=nominal.parameters)
         runs.append(("robust", robust, analyse(robust, "robust")))
     if args.json:
-        document = {"status": nominal.status, "yield": runs[0][2].yield_fraction, "fidelity": levels,
-                    "tolerances": tolerance_analysis.describe(tp),
-                    "design": {**nominal.to_json(), "monte_carlo": runs[0][2].to_json()}, "robust": None}
+        document = {
+            "status": nominal.status,
+            "yield": runs[0][2].yield_fraction,
+            "fidelity": levels,
+            "tolerances": tolerance_analysis.describe(tp),
+            "design": {**nominal.to_json(), "monte_carlo": runs[0][2].to_json()},
+            "robust": None,
+        }
         if args.robust is not None:
             document["robust"] = {"k": args.robust, **runs[1][1].to_json(), "monte_carlo": runs[1][2].to_json()}
         print(json_text(document))
@@ -433,16 +600,21 @@ def run_tolerance(args):
             print(f"\n{name} design ({levels}{held}):\n{result.table()}\n")
             print(carlo.table())
         if args.robust is not None:
-            print("\nyield: " + ", ".join(f"{name} {100 * carlo.yield_fraction:.4g} % ({result.status})"
-                                           for name, result, carlo in runs))
+            print(
+                "\nyield: "
+                + ", ".join(
+                    f"{name} {100 * carlo.yield_fraction:.4g} % ({result.status})" for name, result, carlo in runs
+                )
+            )
     if args.plot:
-        tolerance_analysis.plot_tolerance(runs[0][2], args.plot, robust=runs[1][2] if len(runs) > 1 else None,
-                                          title=Path(args.spec).name)
+        tolerance_analysis.plot_tolerance(
+            runs[0][2], args.plot, robust=runs[1][2] if len(runs) > 1 else None, title=Path(args.spec).name
+        )
     return 0 if all(result.successful for _, result, _ in runs) else EXIT_NOT_SOLVED
 
 
 def run_accuracy(args):
-    rows = accuracy.measure(progress=None if args.json else sys.stderr)
+    rows = accuracy.measure(progress=None if args.json else sys.stderr, quick=args.quick)
     print(json_text([row._asdict() for row in rows]) if args.json else accuracy.table(rows))
     if args.plot:
         accuracy.plot(rows, args.plot)
@@ -498,13 +670,21 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     use_compilation_cache(getattr(args, "debug", False))
     warnings.showwarning = _show_warning
-    command = {"solve": run_solve, "simulate": run_simulate, "accuracy": run_accuracy, "show": run_show,
-               "sweep": run_sweep, "tolerance": run_tolerance}[args.command]
+    command = {
+        "solve": run_solve,
+        "simulate": run_simulate,
+        "accuracy": run_accuracy,
+        "show": run_show,
+        "sweep": run_sweep,
+        "tolerance": run_tolerance,
+    }[args.command]
     try:
         if getattr(args, "plot", None):
             check_output_path(args.plot)
         if getattr(args, "csv", None):
             check_output_path(args.csv, "--csv", ".csv")
+        if getattr(args, "write", None):
+            check_output_path(args.write, "--write", ".toml")
         return command(args)
     except SpecError as error:
         return _fail(args, EXIT_BAD_SPEC, "bad_spec", str(error))
@@ -517,8 +697,12 @@ def main(argv=None):
         if getattr(args, "debug", False):
             raise
         first_line = (str(error).splitlines() or [""])[0][:200]
-        return _fail(args, EXIT_INTERNAL, "internal_error",
-                     f"internal error: {type(error).__name__}: {first_line} (run with --debug for the traceback)")
+        return _fail(
+            args,
+            EXIT_INTERNAL,
+            "internal_error",
+            f"internal error: {type(error).__name__}: {first_line} (run with --debug for the traceback)",
+        )
 
 
 if __name__ == "__main__":

@@ -127,7 +127,9 @@ def _parse_unit(text):
             take()
             power = take()
             if power is None or not re.fullmatch(r"-?\d+", power) or abs(int(power)) > _MAX_UNIT_POWER:
-                raise ValueError(f"cannot read unit {echo(text)}: a power is an integer from -{_MAX_UNIT_POWER} to {_MAX_UNIT_POWER}")
+                raise ValueError(
+                    f"cannot read unit {echo(text)}: a power is an integer from -{_MAX_UNIT_POWER} to {_MAX_UNIT_POWER}"
+                )
             value = _combine((1.0, _DIMENSIONLESS), value, int(power))
         return value
 
@@ -167,7 +169,7 @@ def parse(value, unit, *, key):
             not finite or above 1e200 in SI units.
     """
     _, expected_dim = _parse_unit(unit)
-    example = f"e.g. \"1 {unit}\"" if unit != "1" else "a plain number"
+    example = f'e.g. "1 {unit}"' if unit != "1" else "a plain number"
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise SpecError(f"{key}: expected a quantity in {unit} ({example}), got {echo(value)}")
     if isinstance(value, str):

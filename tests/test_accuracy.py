@@ -1,7 +1,10 @@
 """magdesign accuracy: the rows' shape, the table and the plot, on the cheap models (the
-full run, dome included, is measured by hand: `magdesign accuracy`)."""
+full run, dome included, is measured by hand: `magdesign accuracy`; the quick tier runs
+from the installed wheel in tests/test_installed.py)."""
 
 import json
+import tomllib
+from pathlib import Path
 
 import pytest
 
@@ -27,3 +30,13 @@ def test_table_and_plot(rows, tmp_path):
     path = tmp_path / "accuracy.png"
     accuracy.plot(rows, path)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_pole_case_is_the_examples_scene():
+    """The accuracy table's pole is the one examples/pole_plate.toml builds (the package holds
+    its own copy, since a wheel has no examples/), apart from the levels it measures."""
+    example = tomllib.loads((Path(__file__).resolve().parents[1] / "examples" / "pole_plate.toml").read_text())
+    for name, table in accuracy.SUSPENSION_POLE.items():
+        assert table == {key: example[name][key] for key in table}, name
+    assert set(example["pole"]) - set(accuracy.SUSPENSION_POLE["pole"]) == {"fidelity", "cells"}
+    assert example["pole"]["cells"] in accuracy.POLE_CELLS  # the example's level is a row of the table

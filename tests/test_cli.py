@@ -4,6 +4,7 @@ import json
 import os
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -13,11 +14,16 @@ from magdesign.cli import cpu_tag, main
 EXAMPLES = Path(__file__).parents[1] / "examples"
 
 
-def test_solve_default_prints_the_json_contract(capsys):
+def test_solve_default_prints_the_json_contract(capsys, tmp_path):
     """The default (--fidelity auto): solved with the Reissner dome, confirmed with the
-    axisymmetric one; both answers, with their levels, units and the objective's value."""
-    assert main(["solve", "--json"]) == 0
-    result = json.loads(capsys.readouterr().out)
+    axisymmetric one; both answers, with their levels, units and the objective's value.
+    --write writes the answer at its (axisymmetric) levels: its simulation gives the
+    targets and limits reported."""
+    written = tmp_path / "solved.toml"
+    assert main(["solve", "--json", "--write", str(written)]) == 0
+    captured = capsys.readouterr()
+    result = json.loads(captured.out)
+    assert f"wrote {written}" in captured.err
     assert result["status"] == "successful"
     assert set(result) >= {"status", "parameters", "targets", "steps", "seconds"}
     assert result["parameters"]["geometry.gap"] == pytest.approx(7.4458e-3, abs=1e-7)
@@ -26,25 +32,65 @@ def test_solve_default_prints_the_json_contract(capsys):
     assert result["fidelity"] == "dome axisymmetric, field axis"
     first = result["first_level"]
     assert first["fidelity"] == "dome reissner, field axis" and first["status"] == "successful"
-    # the wall differs between the dome models (PHYSICS.md 2.3: 2.142 mm Reissner), the gap not
+    # the wall differs between the dome models (Reissner: 2.142 mm), the gap not
     assert first["parameters"]["mechanics.thickness"] == pytest.approx(2.1422e-3, abs=1e-7)
     assert abs(result["parameters"]["mechanics.thickness"] - first["parameters"]["mechanics.thickness"]) > 2e-5
     assert result["units"]["geometry.gap"] == "mm" and result["units"]["sensitivity"] == "mT/N"
     assert result["objective"] == {"output": "sensitivity", "sense": "max", "value": result["outputs"]["sensitivity"]}
+    assert result["total_seconds"] >= result["seconds"] + first["seconds"]
+    assert written.read_text().startswith("# solved by magdesign ")
+    assert tomllib.loads(written.read_text())["mechanics"]["fidelity"] == "axisymmetric"
+    assert main(["simulate", str(written), "--json"]) == 0
+    simulated = json.loads(capsys.readouterr().out)["outputs"]
+    for name, entry in {**result["targets"], **result["limits"]}.items():
+        assert simulated[name] == pytest.approx(entry["achieved"], rel=1e-9, abs=0), name
 
 
 def test_solve_table_and_plot(capsys, tmp_path):
-    plot = tmp_path / "design.png"
-    assert main(["solve", str(EXAMPLES / "dome_hall.toml"), "--fidelity", "reissner", "--plot", str(plot)]) == 0
+    """The report says what was designed (name, magnet, mechanics, chip) above the table,
+    names the objective, and gives the total time; --write writes the answer, which
+    simulate and show then read at the solved gap."""
+    plot, written = tmp_path / "design.png", tmp_path / "solved.toml"
+    assert (
+        main(
+            [
+                "solve",
+                str(EXAMPLES / "dome_hall.toml"),
+                "--fidelity",
+                "reissner",
+                "--plot",
+                str(plot),
+                "--write",
+                str(written),
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
+    lines = out.splitlines()
+    assert lines[0] == "dome_hall: cylinder magnet, mooney_rivlin dome, AK8963 hall3d chip"
     assert "geometry.gap" in out and "successful" in out
+    assert any(line.split()[:2] == ["maximize", "sensitivity"] for line in lines)
+    assert any(line.startswith("total time: ") for line in lines) and f"wrote {written}" in lines
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    spec = tomllib.loads(written.read_text())
+    gap = float(spec["geometry"]["gap"].removesuffix(" mm"))
+    assert 7.4 < gap < 7.5 and spec["mechanics"]["fidelity"] == "reissner"  # the answer, 7.4458 mm
+    assert "start" not in spec["design"]["variables"]["geometry.gap"]
+    assert main(["simulate", str(written)]) == 0
+    assert "design spec" not in capsys.readouterr().out  # every variable stated by the scene
+    picture = tmp_path / "solved.png"
+    assert main(["show", str(written), "--plot", str(picture)]) == 0
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_infeasible_design_exits_3_and_names_the_target(capsys, tmp_path):
     spec = (EXAMPLES / "dome_hall.toml").read_text()
-    spec = spec.replace('"mechanics.thickness" = { lower = "1.5 mm", upper = "4 mm", start = "2 mm" }',
-                        '"mechanics.thickness" = { lower = "5 mm", upper = "6 mm", start = "5.5 mm" }')
+    spec = spec.replace(
+        '"mechanics.thickness" = { lower = "1.5 mm", upper = "4 mm" }',
+        '"mechanics.thickness" = { lower = "5 mm", upper = "6 mm" }',
+    )
+    spec = spec.replace('thickness = "2 mm"', 'thickness = "5.5 mm"')  # the variable starts at the scene's value
     path = tmp_path / "infeasible.toml"
     path.write_text(spec)
     assert main(["solve", str(path), "--json", "--fidelity", "reissner"]) == 3
@@ -90,8 +136,22 @@ def test_the_command_keeps_compiled_programs_in_its_cache_folder(tmp_path):
     without the solver would leave every run to compile it again. The programs lie in a
     folder named for the CPU (JAX's cache key leaves it out), and loading them says nothing."""
     cache = tmp_path / "cache"
-    env = {**os.environ, "MAGDESIGN_CACHE_DIR": str(cache), "MAGDESIGN_NO_CACHE": "", "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0"}
-    solve = [sys.executable, "-m", "magdesign", "solve", str(EXAMPLES / "dome_hall.toml"), "--fidelity", "reissner", "--json"]
+    env = {
+        **os.environ,
+        "MAGDESIGN_CACHE_DIR": str(cache),
+        "MAGDESIGN_NO_CACHE": "",
+        "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0",
+    }
+    solve = [
+        sys.executable,
+        "-m",
+        "magdesign",
+        "solve",
+        str(EXAMPLES / "dome_hall.toml"),
+        "--fidelity",
+        "reissner",
+        "--json",
+    ]
     assert subprocess.run(solve, capture_output=True, env=env).returncode == 0
     # A second run loads the programs; XLA logged an error for each ("... SIGILL") before.
     again = subprocess.run(solve, capture_output=True, env=env, text=True)
@@ -112,8 +172,11 @@ def test_simulate_flags_load_points_where_the_dome_did_not_converge(tmp_path, ca
     its wall is pressed flat (it passes its snap near 2.4 N): exit 3, a warning, and the
     JSON says which points converged."""
     text = (EXAMPLES / "dome_hall.toml").read_text()
-    for old, new in (('thickness = "2 mm"', 'thickness = "1 mm"'), ('fidelity = "reissner"', 'fidelity = "axisymmetric"'),
-                     ('normal = ["0 N", "5 N"]', 'normal = ["0 N", "50 N"]')):
+    for old, new in (
+        ('thickness = "2 mm"', 'thickness = "1 mm"'),
+        ('fidelity = "reissner"', 'fidelity = "axisymmetric"'),
+        ('normal = ["0 N", "5 N"]', 'normal = ["0 N", "50 N"]'),
+    ):
         assert old in text
         text = text.replace(old, new)
     path = tmp_path / "thin.toml"
@@ -173,7 +236,9 @@ def test_an_internal_error_is_one_line_and_exit_1_and_debug_shows_it(monkeypatch
     monkeypatch.setattr(cli, "run_simulate", broken)
     assert main(["simulate", "any.toml"]) == 1
     err = capsys.readouterr().err.strip()
-    assert err.splitlines() == ["magdesign simulate: internal error: ZeroDivisionError: a bug (run with --debug for the traceback)"]
+    assert err.splitlines() == [
+        "magdesign simulate: internal error: ZeroDivisionError: a bug (run with --debug for the traceback)"
+    ]
     for argv in (["--debug", "simulate", "any.toml"], ["simulate", "any.toml", "--debug"]):
         with pytest.raises(ZeroDivisionError):
             main(argv)
@@ -183,22 +248,35 @@ def test_version_and_a_closed_pipe():
     version = subprocess.run([sys.executable, "-m", "magdesign", "--version"], capture_output=True, text=True)
     assert version.returncode == 0 and version.stdout.startswith("magdesign ")
     # simulate | head -1: the reader leaves after one line; no traceback.
-    simulate = subprocess.Popen([sys.executable, "-m", "magdesign", "simulate", str(EXAMPLES / "dome_hall.toml")],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    simulate = subprocess.Popen(
+        [sys.executable, "-m", "magdesign", "simulate", str(EXAMPLES / "dome_hall.toml")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     simulate.stdout.readline()
     simulate.stdout.close()
     err = simulate.stderr.read().decode()
     assert simulate.wait() == 0 and "Traceback" not in err, err
 
 
-@pytest.mark.parametrize("plot", ["{tmp}", "{tmp}/no/such/folder/x.png", "{tmp}/picture"])
-def test_a_plot_path_that_cannot_be_written_is_refused_before_the_solve(tmp_path, capsys, plot):
+@pytest.mark.parametrize(
+    "option, path",
+    [
+        ("--plot", "{tmp}"),
+        ("--plot", "{tmp}/no/such/folder/x.png"),
+        ("--plot", "{tmp}/picture"),
+        ("--write", "{tmp}"),
+        ("--write", "{tmp}/no/such/folder/x.toml"),
+        ("--write", "{tmp}/solved.txt"),
+    ],
+)
+def test_an_output_path_that_cannot_be_written_is_refused_before_the_solve(tmp_path, capsys, option, path):
     """A folder (once silently written as folder.png), a missing folder, a name without
-    .png: exit 2 at once, and nothing written."""
-    plot = plot.format(tmp=tmp_path)
-    assert main(["solve", "--plot", plot]) == 2
+    .png (.toml): exit 2 at once, and nothing written."""
+    path = path.format(tmp=tmp_path)
+    assert main(["solve", option, path]) == 2
     captured = capsys.readouterr()
-    assert captured.out == "" and "--plot" in captured.err and len(captured.err.strip().splitlines()) == 1
+    assert captured.out == "" and option in captured.err and len(captured.err.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
 
 
@@ -209,7 +287,10 @@ def test_json_output_is_strict_json():
 
     text = json_text({"a": float("nan"), "b": [1.5, float("inf"), {"c": -float("inf")}], "d": "x"})
     assert json.loads(text, parse_constant=lambda name: pytest.fail(f"bare {name}")) == {
-        "a": None, "b": [1.5, None, {"c": None}], "d": "x"}
+        "a": None,
+        "b": [1.5, None, {"c": None}],
+        "d": "x",
+    }
 
 
 @pytest.mark.parametrize("normal", ['["0 N", "0 N"]', '["0 N", "-5 N"]'])
@@ -281,13 +362,26 @@ def test_an_implausible_value_warns_in_one_line(tmp_path, capsys):
     assert "warning: magnet.remanence" in err and "Traceback" not in err
 
 
-def test_simulate_of_a_design_spec_says_it_simulates_the_start_point(capsys):
+def test_simulate_of_a_design_spec_simulates_its_scene_as_written(capsys):
+    """[geometry] gap = "7.4 mm" is the gap simulated, and where the solve starts."""
     assert main(["simulate", str(EXAMPLES / "dome_hall.toml"), "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
-    assert result["start"] == {"geometry.gap": pytest.approx(7e-3), "mechanics.thickness": pytest.approx(2e-3)}
-    # the gap in the outputs is the start's, not [geometry]'s 7.4 mm
-    assert result["outputs"]["closest_gap"] == pytest.approx(7e-3 + min(u[2] for u in result["displacement"]))
+    assert result["start"] == {"geometry.gap": 7.4e-3, "mechanics.thickness": 2e-3}
+    assert result["outputs"]["closest_gap"] == pytest.approx(7.4e-3 + min(u[2] for u in result["displacement"]))
     assert result["output_units"]["compliance"] == "m/N"
+
+
+def test_a_start_that_differs_from_the_scene_is_refused_naming_both_keys(tmp_path, capsys):
+    text = (EXAMPLES / "dome_hall.toml").read_text()
+    old = '"geometry.gap" = { lower = "4 mm", upper = "20 mm" }'
+    assert old in text
+    path = tmp_path / "two_gaps.toml"
+    path.write_text(text.replace(old, '"geometry.gap" = { lower = "4 mm", upper = "20 mm", start = "7 mm" }'))
+    assert main(["simulate", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert (
+        len(err.splitlines()) == 1 and "design.variables.geometry.gap.start" in err and "geometry.gap = '7.4 mm'" in err
+    )
 
 
 def test_a_time_series_effect_needs_two_load_points(tmp_path, capsys):
@@ -298,5 +392,34 @@ def test_a_time_series_effect_needs_two_load_points(tmp_path, capsys):
     captured = capsys.readouterr()
     assert "load.points" in captured.err and len(captured.err.strip().splitlines()) == 1
     # with --json the error is also one JSON object on stdout
-    assert json.loads(captured.out) == {"error": "bad_spec", "message": captured.err.strip().split(": ", 1)[1],
-                                        "exit_code": 2}
+    assert json.loads(captured.out) == {
+        "error": "bad_spec",
+        "message": captured.err.strip().split(": ", 1)[1],
+        "exit_code": 2,
+    }
+
+
+def test_simulate_warns_when_the_chip_clips_and_its_columns_are_readings(tmp_path, capsys):
+    """The default scene with the magnet 5 mm above the AK8963: pressed 1.6 mm nearer, its
+    on-axis field (about 12 mT) is beyond the chip's 4.8 mT range: one warning line on
+    stderr, and the table's columns are the chip's readings, clipped at 4.8 mT."""
+    text = (EXAMPLES / "dome_hall.toml").read_text()
+    assert 'gap = "7.4 mm"' in text
+    path = tmp_path / "near.toml"
+    path.write_text(text[: text.index("[design")].replace('gap = "7.4 mm"', 'gap = "5 mm"'))
+    assert main(["simulate", str(path)]) == 0
+    captured = capsys.readouterr()
+    warning = [line for line in captured.err.splitlines() if "clips" in line]
+    assert len(warning) == 1 and warning[0].startswith("magdesign: warning: the chip clips")
+    header = captured.out.splitlines()[0]
+    assert "s0.Bz reading (mT)" in header and "field" not in header
+    pressed = captured.out.splitlines()[11].split()  # the 11th load point, 5 N; its last column is s0.Bz
+    assert float(pressed[-1]) == pytest.approx(4.8, rel=1e-12)
+    # 10 mm above the chip (8.4 mm or more at 5 N: below 2.2 mT on the axis) no reading clips
+    path.write_text(
+        text[: text.index("[design")]
+        .replace('gap = "7.4 mm"', 'gap = "10 mm"')
+        .replace('outer_radius = "8 mm"', 'outer_radius = "10.5 mm"')
+    )
+    assert main(["simulate", str(path)]) == 0
+    assert "clips" not in capsys.readouterr().err

@@ -34,8 +34,10 @@ def _cylinder_with_jacobians(point, radius, aspect, polarization):
     def field(point, radius):
         return cylinder(point, radius=radius, height=aspect * radius, polarization=polarization)
 
-    return field(point, radius), jax.jacfwd(field, argnums=(0, 1))(point, radius), jax.jacrev(field, argnums=(0, 1))(
-        point, radius
+    return (
+        field(point, radius),
+        jax.jacfwd(field, argnums=(0, 1))(point, radius),
+        jax.jacrev(field, argnums=(0, 1))(point, radius),
     )
 
 
@@ -43,9 +45,20 @@ def _special_points(aspect):
     """Axis, centre, both faces, side wall, edges (exactly and 1e-12 radii off), in radii."""
     b = aspect / 2
     return [
-        (0.0, 0.0, 0.0), (0.0, 0.0, b), (0.0, 0.0, -b), (0.0, 0.0, 3.0), (0.3, 0.0, b), (0.0, 0.4, -b),
-        (1.0, 0.0, 0.0), (1.0, 0.0, b), (0.0, 1.0, -b), (1.0 + 1e-12, 0.0, b), (1.0, 0.0, b + 1e-12),
-        (0.0, 0.0, 1e6), (1e6, 0.0, 0.0), (0.6e6, 0.0, 0.8e6),
+        (0.0, 0.0, 0.0),
+        (0.0, 0.0, b),
+        (0.0, 0.0, -b),
+        (0.0, 0.0, 3.0),
+        (0.3, 0.0, b),
+        (0.0, 0.4, -b),
+        (1.0, 0.0, 0.0),
+        (1.0, 0.0, b),
+        (0.0, 1.0, -b),
+        (1.0 + 1e-12, 0.0, b),
+        (1.0, 0.0, b + 1e-12),
+        (0.0, 0.0, 1e6),
+        (1e6, 0.0, 0.0),
+        (0.6e6, 0.0, 0.8e6),
     ]
 
 
@@ -91,7 +104,7 @@ def test_thin_discs_and_long_rods_equal_40_digit_references_at_any_scale(radius,
 @FAST
 @given(radius=st.floats(1e-6, 0.1), aspect=st.floats(0.02, 50.0), height_over_radius=st.floats(0.0, 1e6))
 def test_cylinder_on_the_axis_equals_the_closed_form(radius, aspect, height_over_radius):
-    """Documented: the exact kernel equals seed 001's Eq. 1 on the axis to 1e-13, at any scale."""
+    """Documented: the exact kernel equals the dome-Hall paper's Eq. 1 on the axis to 1e-13, at any scale."""
     height = aspect * radius
     z = height / 2 + height_over_radius * radius
     exact = cylinder(jnp.array([0.0, 0.0, z]), radius=radius, height=height, polarization=1.3)
@@ -144,8 +157,11 @@ def test_hyperelastic_stresses_are_finite_up_to_stretch_three(stretch, c10, c01)
 def _reissner(outer_radius, ratio):
     def compliance(outer_radius, thickness):
         return dome_compliance(
-            outer_radius=outer_radius, thickness=thickness, material=MooneyRivlin(c10=0.1182e6, c01=0.1769e6),
-            max_force=5.0, fidelity="reissner",
+            outer_radius=outer_radius,
+            thickness=thickness,
+            material=MooneyRivlin(c10=0.1182e6, c01=0.1769e6),
+            max_force=5.0,
+            fidelity="reissner",
         )
 
     return compliance(outer_radius, ratio * outer_radius), jax.grad(compliance, argnums=(0, 1))(
@@ -164,6 +180,7 @@ def test_reissner_dome_is_finite_for_thin_and_thick_walls(outer_radius, ratio):
 @pytest.mark.parametrize("fidelity", ["hooke", "bonded"])
 def test_layer_is_finite_for_tiny_and_huge_thickness(thickness, fidelity):
     for material in (LinearElastic(E=83e3, nu=0.49), NeoHookean(mu=250e3, bulk=12.5e6)):
+
         def normal(h):
             return layer_stiffness(thickness=h, area=36e-6, material=material, fidelity=fidelity).normal
 

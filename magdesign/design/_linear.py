@@ -69,7 +69,9 @@ class LUOrSVD(lx.AbstractLinearSolver):
             inverted = jnp.where(kept, 1.0 / jnp.where(kept, s, 1.0), 0.0)
             solution = vt.T @ (inverted * (u.T @ vector))
         if lu is not None:
-            solution = jnp.where(well, jsp.linalg.lu_solve((lu, pivots), vector, trans=1 if transposed.value else 0), solution)
+            solution = jnp.where(
+                well, jsp.linalg.lu_solve((lu, pivots), vector, trans=1 if transposed.value else 0), solution
+            )
         return unravel_solution(solution, packed_structures), lx.RESULTS.successful, {}
 
     def transpose(self, state, options: dict[str, Any]):

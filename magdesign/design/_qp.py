@@ -76,7 +76,9 @@ def _solve_on_active_set(Q, q, A, b, G, h, guess, tol, box):
     afterwards, so the system has nw + me + (mi - len(box rows)) unknowns, not nw + me + mi
     (11 instead of 20 on the default design: its LU is a third of the cost)."""
     nw, me = Q.shape[0], A.shape[0]
-    variables, signs = (np.zeros(0, int), np.zeros(0)) if box is None else (np.asarray(box[0]), np.asarray(box[1], float))
+    variables, signs = (
+        (np.zeros(0, int), np.zeros(0)) if box is None else (np.asarray(box[0]), np.asarray(box[1], float))
+    )
     general = G.shape[0] - variables.shape[0]
     G_rows, h_rows, kept = G[:general], h[:general], guess[:general].astype(Q.dtype)
     kept_bounds = guess[general:].astype(Q.dtype)

@@ -82,8 +82,9 @@ def plot_sweep(result, path):
     if len(keys) not in (1, 2):
         raise ValueError(f"a sweep picture shows 1 or 2 swept keys, got {len(keys)}")
     units = result.units
-    panels = list(result.parameters) + [name for name in result.outputs
-                                        if name not in result.targets and name != MECHANICS_CONVERGED]
+    panels = list(result.parameters) + [
+        name for name in result.outputs if name not in result.targets and name != MECHANICS_CONVERGED
+    ]
     columns = min(3, len(panels))
     rows = -(-len(panels) // columns)
     figure = Figure(figsize=(4.4 * columns, 3.4 * rows))
@@ -98,7 +99,11 @@ def plot_sweep(result, path):
         if len(keys) == 1:
             axis.plot(x[solved], shown[solved], "o-", color="C0", markersize=3, label="optimum")
             if name in result.parameters and keys[0] in result.derivatives:
-                slope = result.derivatives[keys[0]][name] * _in_unit(1.0, units.get(name)) / _in_unit(1.0, units.get(keys[0]))
+                slope = (
+                    result.derivatives[keys[0]][name]
+                    * _in_unit(1.0, units.get(name))
+                    / _in_unit(1.0, units.get(keys[0]))
+                )
                 half = 0.3 * (x.max() - x.min()) / max(len(x) - 1, 1)
                 for xi, yi, si in zip(x[solved], shown[solved], slope[solved]):
                     axis.plot([xi - half, xi + half], [yi - si * half, yi + si * half], color="C1", linewidth=1.5)
@@ -126,13 +131,20 @@ def plot_sweep(result, path):
             if failed_statuses:
                 axis.legend(fontsize=7)
             if span is not None:
-                axis.text(0.5, 0.5, f"{np.nanmedian(shown):.6g} {units.get(name) or ''} at every solved point",
-                          transform=axis.transAxes, ha="center", fontsize=8, color="white")
+                axis.text(
+                    0.5,
+                    0.5,
+                    f"{np.nanmedian(shown):.6g} {units.get(name) or ''} at every solved point",
+                    transform=axis.transAxes,
+                    ha="center",
+                    fontsize=8,
+                    color="white",
+                )
             axis.set_xlabel(_label(keys[0], units.get(keys[0])))
             axis.set_ylabel(_label(keys[1], units.get(keys[1])))
             axis.set_title(name, fontsize=9)
         axis.grid(alpha=0.3)
-    for axis in axes[len(panels):]:
+    for axis in axes[len(panels) :]:
         axis.set_visible(False)
     figure.suptitle(f"magdesign sweep: {result.summary()}", fontsize=10)
     figure.tight_layout()

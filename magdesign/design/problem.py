@@ -246,3 +246,25 @@ def per_problem(fn):
         return value
 
     return memoised
+
+
+# The spec each problem was built from (magdesign.design.spec.problem_from_spec), by id, for
+# as long as the problem lives: a solved result writes it back with its answer in place.
+_SOURCES = {}
+
+
+def remember_source(problem: Problem, source: dict) -> None:
+    """Keep ``source`` (a parsed spec) as the spec ``problem`` was built from (:func:`source_of`)."""
+    key = id(problem)
+
+    def forget(ref):
+        if _SOURCES.get(key, (None,))[0] is ref:
+            del _SOURCES[key]
+
+    _SOURCES[key] = (weakref.ref(problem, forget), source)
+
+
+def source_of(problem: Problem) -> dict | None:
+    """The spec ``problem`` was built from (:func:`remember_source`), or None."""
+    entry = _SOURCES.get(id(problem))
+    return entry[1] if entry is not None and entry[0]() is problem else None

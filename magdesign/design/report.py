@@ -6,7 +6,8 @@ from typing import NamedTuple
 import equinox as eqx
 import numpy as np
 
-from magdesign.design.problem import per_problem
+from magdesign.design.problem import per_problem, source_of
+from magdesign.scene.core import CLIPS_ABOVE
 from magdesign.units import convert
 
 
@@ -33,9 +34,11 @@ STATUS_NAMES = tuple(DesignStatus._name_to_item)
 def _keys(problem):
     """Names of the theta entries: each target's output, "output.side" per limit row, then
     each fixed input's name."""
-    return [t.output for t in problem.targets] + [
-        f"{problem.limits[i].output}.{side}" for i, side in problem.limit_rows
-    ] + list(problem.fixed_names)
+    return (
+        [t.output for t in problem.targets]
+        + [f"{problem.limits[i].output}.{side}" for i, side in problem.limit_rows]
+        + list(problem.fixed_names)
+    )
 
 
 class _Layout(NamedTuple):
@@ -88,6 +91,11 @@ class DesignResult(eqx.Module):
         violated: names of the targets and limits not met.
         outputs: the model outputs named by the problem (targets, limits, objective, report).
         steps: solver steps, all phases; seconds: wall time of the solve.
+        units: display units by name (None: SI).
+        objective: (output, "max" | "min") of the problem's objective, or None.
+        source: the spec the problem was built from
+            (:func:`magdesign.design.spec.problem_from_spec`, at the levels it was solved
+            at), or None: what :meth:`spec` writes the answer into.
     """
 
     status: str
@@ -101,6 +109,8 @@ class DesignResult(eqx.Module):
     steps: int
     seconds: float
     units: dict
+    objective: tuple[str, str] | None = None
+    source: dict | None = None
 
     @classmethod
     def from_core(cls, problem, solution, theta, seconds, rtol):
@@ -122,7 +132,9 @@ class DesignResult(eqx.Module):
         names, output_names, n_targets, keys, limit_rows, units = _layout(problem)
         rows = n_targets + len(limit_rows)
         outputs = dict(zip(output_names, values))
-        targets = {output: {"target": theta[k], "achieved": outputs[output]} for k, output in enumerate(keys[:n_targets])}
+        targets = {
+            output: {"target": theta[k], "achieved": outputs[output]} for k, output in enumerate(keys[:n_targets])
+        }
         limits = {}
         for k, (output, side) in enumerate(limit_rows):
             entry = limits.setdefault(output, {"achieved": outputs[output], "active": False})
@@ -137,7 +149,9 @@ class DesignResult(eqx.Module):
             name: ("lower" if at_lower[j] else "upper") for j, name in enumerate(names) if at_lower[j] or at_upper[j]
         }
         violated = tuple(
-            key for k, key in enumerate(keys[:rows]) if (abs(residuals[k]) if k < n_targets else residuals[k]) > float(rtol)
+            key
+            for k, key in enumerate(keys[:rows])
+            if (abs(residuals[k]) if k < n_targets else residuals[k]) > float(rtol)
         )
         return cls(
             status=STATUS_NAMES[int(solution.status)],
@@ -151,6 +165,8 @@ class DesignResult(eqx.Module):
             steps=int(solution.steps),
             seconds=float(seconds),
             units=dict(units),
+            objective=None if problem.objective is None else (problem.objective.output, problem.objective.sense),
+            source=source_of(problem),
         )
 
     @property
@@ -158,7 +174,8 @@ class DesignResult(eqx.Module):
         return self.status == "successful"
 
     def to_json(self) -> dict:
-        """The JSON object of DESIGN.md section 3, plus limits, active bounds, derivatives,
+        """The JSON object ``magdesign solve --json`` prints (status, parameters, targets, steps,
+        seconds), plus limits, active bounds, derivatives,
         every output the problem names (SI) and the units the table shows them in."""
         return {
             "status": self.status,
@@ -178,9 +195,17 @@ class DesignResult(eqx.Module):
         """A readable report: parameters, targets, limits, other outputs, status and time."""
         unit = self.units.get
         shown = sorted(set(self.targets) | set(self.limits))
-        others = [name for name in self.outputs if name not in shown]
-        width = max(len(name) for name in [*self.parameters, *shown, *others, "parameter"]) + 2
-        row = lambda *cells: "  " + "".join(f"{cell:<{width if i == 0 else 18}}" for i, cell in enumerate(cells)).rstrip()  # noqa: E731
+        objective = None if self.objective is None else self.objective[0]
+        others = [name for name in self.outputs if name not in shown and name != objective]
+        aim = (
+            None
+            if self.objective is None
+            else f"{'maximize' if self.objective[1] == 'max' else 'minimize'} {objective}"
+        )
+        width = max(len(name) for name in [*self.parameters, *shown, *others, aim or "", "parameter"]) + 2
+        row = lambda *cells: (
+            "  " + "".join(f"{cell:<{width if i == 0 else 18}}" for i, cell in enumerate(cells)).rstrip()
+        )  # noqa: E731
         lines = [row("parameter", "value")]
         for name, value in self.parameters.items():
             bound = f"(on {self.active_bounds[name]} bound)" if name in self.active_bounds else ""
@@ -189,7 +214,9 @@ class DesignResult(eqx.Module):
             lines.append(row("target", "wanted", "achieved", "met"))
             for name, t in self.targets.items():
                 met = "no" if name in self.violated else "yes"
-                lines.append(row(name, format_quantity(t["target"], unit(name)), format_quantity(t["achieved"], unit(name)), met))
+                lines.append(
+                    row(name, format_quantity(t["target"], unit(name)), format_quantity(t["achieved"], unit(name)), met)
+                )
         if self.limits:
             lines.append(row("limit", "bound", "achieved", "active"))
             for name, lim in self.limits.items():
@@ -198,16 +225,55 @@ class DesignResult(eqx.Module):
                     for side in ("upper", "lower")
                     if side in lim
                 )
-                lines.append(row(name, bounds, format_quantity(lim["achieved"], unit(name)), "yes" if lim["active"] else "no"))
+                lines.append(
+                    row(name, bounds, format_quantity(lim["achieved"], unit(name)), "yes" if lim["active"] else "no")
+                )
+        if objective is not None:
+            lines.append(row("objective", "value"))
+            lines.append(row(aim, format_quantity(self.outputs[objective], unit(objective))))
         if others:
             lines.append(row("output", "value"))
             lines.extend(row(name, format_quantity(self.outputs[name], unit(name))) for name in others)
+        clipping = self.outputs.get("saturation_ratio")
+        if clipping is not None and clipping > CLIPS_ABOVE:
+            lines.append(
+                f"the chip clips: its largest reading is {clipping:.3g} times its range (saturation_ratio); "
+                "the real chip's readings stop at its range, and sensitivity and resolution are the unclipped signal's"
+            )
         violated = f" (not met: {', '.join(self.violated)})" if self.violated else ""
         lines.append(f"status: {self.status}{violated}   steps: {self.steps}   time: {self.seconds * 1e3:.3g} ms")
         return "\n".join(lines)
 
     def __str__(self) -> str:
         return self.table()
+
+    def spec(self) -> dict:
+        """The spec this result was solved from with its answer in place (a parsed TOML
+        dict): each variable's value written into the scene's own table in the unit the
+        spec writes it (read back exactly, or one rounding off), no ``start`` left for it,
+        at the levels the answer was solved at. ``magdesign simulate`` or ``show`` of it
+        gives the design reported here.
+
+        Raises:
+            ValueError: the result's problem was not built from a spec, or a value is not finite.
+        """
+        # imported here: magdesign.design.spec imports the solver, which imports this module
+        from magdesign.design.spec import solved_spec
+
+        if self.source is None:
+            raise ValueError(
+                "this result's problem was not built from a spec "
+                "(magdesign.design.spec.problem_from_spec): there is no spec to write"
+            )
+        return solved_spec(self.source, self.parameters, self.units)
+
+    def write_spec(self, path) -> None:
+        """Write :meth:`spec` to the TOML file ``path`` under the header "# solved by magdesign
+        <version> on <date>: status <status>"; the file is replaced whole or not at all."""
+        from magdesign.design.spec import write_spec
+
+        violated = f" (not met: {', '.join(self.violated)})" if self.violated else ""
+        write_spec(path, self.spec(), status=f"{self.status}{violated}")
 
 
 class DesignSweep(eqx.Module):
@@ -335,12 +401,18 @@ class DesignSweep(eqx.Module):
         parameters and the problem's outputs in their display units."""
         columns = {**self.over, **self.parameters, **self._achieved()}
         names = list(columns)
-        header = names[: len(self.over)] + ["status"] + names[len(self.over):]
+        header = names[: len(self.over)] + ["status"] + names[len(self.over) :]
         cells = [[f"{name} ({self.units.get(name)})" if self.units.get(name) else name for name in header]]
         flat = {name: np.ravel(values) for name, values in columns.items()}
         for index, status in enumerate(np.ravel(self.status)):
-            row = [f"{convert(flat[name][index], self.units.get(name)):.6g}" if self.units.get(name)
-                   else f"{flat[name][index]:.6g}" for name in names]
-            cells.append(row[: len(self.over)] + [str(status)] + row[len(self.over):])
+            row = [
+                f"{convert(flat[name][index], self.units.get(name)):.6g}"
+                if self.units.get(name)
+                else f"{flat[name][index]:.6g}"
+                for name in names
+            ]
+            cells.append(row[: len(self.over)] + [str(status)] + row[len(self.over) :])
         widths = [max(len(row[i]) for row in cells) + 2 for i in range(len(header))]
-        return "\n".join("  " + "".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in cells)
+        return "\n".join(
+            "  " + "".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in cells
+        )

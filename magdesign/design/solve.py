@@ -207,8 +207,9 @@ def _evaluate(problem: Problem, y, theta):
     except KeyError as error:
         name = error.args[0] if error.args else None
         if isinstance(name, str) and name not in inputs:
-            raise ValueError(f"{name}: the model reads an input that is neither a variable nor fixed "
-                             f"(inputs: {sorted(inputs)})") from error
+            raise ValueError(
+                f"{name}: the model reads an input that is neither a variable nor fixed (inputs: {sorted(inputs)})"
+            ) from error
         raise
     missing = [name for name in problem.outputs if name not in outputs]
     if missing:
@@ -523,8 +524,9 @@ def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_
         )
         # (a bound's multiplier below its slack is no multiplier; where the radius, not the
         # bound, limits the step it is the radius's, kept for the Hessian's multipliers)
-        lower_multipliers, upper_multipliers = jnp.where(at_lower, lower_multipliers, 0.0), jnp.where(
-            at_upper, upper_multipliers, 0.0
+        lower_multipliers, upper_multipliers = (
+            jnp.where(at_lower, lower_multipliers, 0.0),
+            jnp.where(at_upper, upper_multipliers, 0.0),
         )
         at_lower, at_upper = at_lower & (y <= radius), at_upper & (y_max - y <= radius)
         # Those the step ends on to rounding are active too, with no multiplier (weakly): at
@@ -543,15 +545,19 @@ def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_
     J_l = J_c[n_targets:]
     reach = jnp.sum((flat.T @ J_l.T) ** 2, axis=0) > DESIGN_NULL_SPACE_RTOL * jnp.sum(J_l**2, axis=1)
     holds = (limit_multipliers > jnp.maximum(DESIGN_HELD_MULTIPLIER, limit_slack)) & ~_elastic(limit_multipliers)
-    return _Step(
-        d=d,
-        multipliers=jnp.concatenate([qp.y, limit_multipliers]),
-        linear_violation=_violation(linearised, n_targets),
-        active_limits=active_limits,
-        at_lower=at_lower,
-        at_upper=at_upper,
-        qp_rows=qp.z > DESIGN_ACTIVE_MULTIPLIER,
-    ), jnp.concatenate([lower_multipliers, upper_multipliers]), (holds & reach, solved)
+    return (
+        _Step(
+            d=d,
+            multipliers=jnp.concatenate([qp.y, limit_multipliers]),
+            linear_violation=_violation(linearised, n_targets),
+            active_limits=active_limits,
+            at_lower=at_lower,
+            at_upper=at_upper,
+            qp_rows=qp.z > DESIGN_ACTIVE_MULTIPLIER,
+        ),
+        jnp.concatenate([lower_multipliers, upper_multipliers]),
+        (holds & reach, solved),
+    )
 
 
 class _Solves(NamedTuple):
@@ -728,8 +734,9 @@ def _saddle_on_faces(jet, step: _Step, bound_multipliers, weight, y, y_max, n_ta
     subsets = (np.arange(2**k)[:, None] >> np.arange(k)) & 1 == 1
     faces = jnp.zeros((2**k, m + n), bool).at[:, chosen].set(subsets & weak[chosen])
     e, v, w, _, _ = jax.vmap(
-        lambda face: _least_curvature(jet, step, bound_multipliers, weight, jnp.zeros(n), n_targets,
-                                      (face[:m], face[m:]))
+        lambda face: _least_curvature(
+            jet, step, bound_multipliers, weight, jnp.zeros(n), n_targets, (face[:m], face[m:])
+        )
     )(faces)
     v = jnp.where(faces[:, m:] | lower | upper, 0.0, v)  # a held variable's rounding must not block its bound
 
@@ -900,6 +907,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             (jet, step, bound_multipliers, state.weight, approach),
             (jnp.ones(()), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n)),
         )
+
         def leaving(v):
             """(v, its room in the box, the most room either way in the box and the limits):
             leave a saddle downhill, or, where flat, towards the side with more room in the
@@ -941,9 +949,27 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         probe = stationary & ~saddle & flat & (state.escapes < DESIGN_ESCAPES) & (problem.objective is not None)
         phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)
         return eqx.tree_at(
-            lambda s: (s.phase, s.y, s.jet, s.step, s.bound_multipliers, s.direction, s.correction, s.alpha, s.merit,
-                       s.slope, s.curvature, s.nu, s.bent, s.escapes, s.radius, s.history, s.bend_first,
-                       s.second, s.second_correction),
+            lambda s: (
+                s.phase,
+                s.y,
+                s.jet,
+                s.step,
+                s.bound_multipliers,
+                s.direction,
+                s.correction,
+                s.alpha,
+                s.merit,
+                s.slope,
+                s.curvature,
+                s.nu,
+                s.bent,
+                s.escapes,
+                s.radius,
+                s.history,
+                s.bend_first,
+                s.second,
+                s.second_correction,
+            ),
             state,
             (
                 phase,
@@ -977,11 +1003,17 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         alpha = state.alpha
         bend_now = ~polishing & (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & state.bend_first
         if problem.objective is not None:
-            correction = where_needed(bend_now, lambda operands: _bend(*operands), bend_operands(state), state.correction)
+            correction = where_needed(
+                bend_now, lambda operands: _bend(*operands), bend_operands(state), state.correction
+            )
             state = eqx.tree_at(
                 lambda s: (s.bent, s.correction, s.straight),
                 state,
-                (state.bent | (bend_now & jnp.any(correction != 0.0)), correction, jnp.where(bend_now, jnp.inf, state.straight)),
+                (
+                    state.bent | (bend_now & jnp.any(correction != 0.0)),
+                    correction,
+                    jnp.where(bend_now, jnp.inf, state.straight),
+                ),
             )
         trial = state.y + alpha * state.direction + jnp.where(state.bent, alpha**2, 0.0) * state.correction
         return state, jnp.where(state.phase == START, state.y, jnp.clip(trial, 0.0, y_max))
@@ -1058,7 +1090,12 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         y=y0,
         jet=blank_jet,
         step=_Step(
-            jnp.zeros(n), jnp.zeros(m), jnp.zeros(()), no(m - n_targets), no(n), no(n),
+            jnp.zeros(n),
+            jnp.zeros(m),
+            jnp.zeros(()),
+            no(m - n_targets),
+            no(n),
+            no(n),
             _no_slack_rows(n, n_targets, m - n_targets),
         ),
         bound_multipliers=jnp.zeros(2 * n),
@@ -1092,7 +1129,9 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         # update, which runs if any lane searches, gets a polishing lane's own finite jet.
         jet = _jet(problem, jnp.where(stepping, loop.polish.z[:n], trial), theta)
         searched = where_needed(
-            ~polishing, lambda operands: update(*operands), (prepared, trial, _pick(polishing, loop.search.jet, jet)),
+            ~polishing,
+            lambda operands: update(*operands),
+            (prepared, trial, _pick(polishing, loop.search.jet, jet)),
             loop.search,
         )
         ended = ~polishing & ((searched.phase >= CONVERGED) | (searched.steps >= settings.max_steps))
@@ -1162,7 +1201,9 @@ class _KKT(eqx.Module):
         n = self.y_max.shape[0]
         lam, dy, dlam = z[n:], dz[:n], dz[n:]
         d_stationarity = _lagrangian_hessian(jet, lam, self.weight) @ dy + jet.J[1:].T @ dlam
-        return jnp.concatenate([jnp.where(self.active.fixed, dy, d_stationarity), jnp.where(self.equations, jet.J[1:] @ dy, dlam)])
+        return jnp.concatenate(
+            [jnp.where(self.active.fixed, dy, d_stationarity), jnp.where(self.equations, jet.J[1:] @ dy, dlam)]
+        )
 
     def unknowns(self, y, multipliers):
         """(n + m,) z at y (n,) with the held rows' ``multipliers`` (m,)."""
@@ -1269,7 +1310,9 @@ def _linearised(root, _, inputs):
     root from the model's jet there, in theta from :func:`_in_theta`. (``inputs`` ends
     with what optimistix's adjoint appends.)"""
     equations, theta, z, jet, usable = inputs[:5]
-    return jnp.where(usable, equations.rows(z, _in_theta(equations, z, jet, theta)) + equations.tangent(jet, z, root - z), 0.0)
+    return jnp.where(
+        usable, equations.rows(z, _in_theta(equations, z, jet, theta)) + equations.tangent(jet, z, root - z), 0.0
+    )
 
 
 def _about(equations, z, jet):
@@ -1315,7 +1358,9 @@ class _Polish(eqx.Module):
 def _polish_at(equations, z, jet, newton):
     """The polish's state before its first step, at z, where the model's :class:`Jet` is
     ``jet`` (or where it will be evaluated first)."""
-    state = newton.init(_about(equations, z, jet), z, None, {}, jax.eval_shape(equations.rows, z, jet), None, frozenset())
+    state = newton.init(
+        _about(equations, z, jet), z, None, {}, jax.eval_shape(equations.rows, z, jet), None, frozenset()
+    )
     return _Polish(z, z, jet, state, jnp.asarray(False))
 
 
@@ -1413,8 +1458,11 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     residual = jnp.where(kept, residual, jnp.max(jnp.abs(at_search), initial=0.0))
     rounding = jnp.zeros(())
     if problem.objective is not None:
-        hessian = jnp.where(kept, _lagrangian_hessian(polished, multipliers, search.weight),
-                            _lagrangian_hessian(search.jet, multipliers_start, search.weight))
+        hessian = jnp.where(
+            kept,
+            _lagrangian_hessian(polished, multipliers, search.weight),
+            _lagrangian_hessian(search.jet, multipliers_start, search.weight),
+        )
         rounding = jnp.finfo(y.dtype).eps * (1.0 + jnp.max(jnp.abs(y))) * jnp.linalg.norm(hessian)
     kkt_met = (residual <= jnp.maximum(jnp.sqrt(tol), rounding)) & (search.phase == CONVERGED)
     targets_broken, limits_broken = _broken(c, n_targets, tol)
@@ -1463,7 +1511,9 @@ def _broken(c, n_targets, tol):
 
 def _packed(problem, y0, theta, settings):
     """The core's solution as one float64 vector, read back from the device in one go."""
-    return jnp.concatenate([jnp.ravel(leaf).astype(jnp.float64) for leaf in jax.tree.leaves(_core(problem, y0, theta, settings))])
+    return jnp.concatenate(
+        [jnp.ravel(leaf).astype(jnp.float64) for leaf in jax.tree.leaves(_core(problem, y0, theta, settings))]
+    )
 
 
 def _unpack(problem, packed):
@@ -1518,12 +1568,28 @@ def _host(problem):
     theta = arrays[4]
     key, leaves = _split(problem)
     n, m, k = len(problem.variables), len(problem.targets) + len(problem.limit_rows), len(problem.outputs)
-    sizes = {"x": n, "multipliers": m, "outputs": k, "residuals": m, "active_limits": m - len(problem.targets),
-             "at_lower": n, "at_upper": n, "derivatives": n * len(theta), "status": 1, "steps": 1}
+    sizes = {
+        "x": n,
+        "multipliers": m,
+        "outputs": k,
+        "residuals": m,
+        "active_limits": m - len(problem.targets),
+        "at_lower": n,
+        "at_upper": n,
+        "derivatives": n * len(theta),
+        "status": 1,
+        "steps": 1,
+    }
     stops = np.cumsum(list(sizes.values())).tolist()
     layout = {name: (stop - size, stop) for (name, size), stop in zip(sizes.items(), stops)}
-    return _Host(arrays, jax.device_put(_start(problem, None, arrays)), jax.device_put(theta), key,
-                 jax.device_put(leaves), layout)
+    return _Host(
+        arrays,
+        jax.device_put(_start(problem, None, arrays)),
+        jax.device_put(theta),
+        key,
+        jax.device_put(leaves),
+        layout,
+    )
 
 
 @functools.lru_cache(maxsize=64)
@@ -1673,8 +1739,18 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None, con
     mine = slice(index * share, min((index + 1) * share, count))
     y0, thetas = np.asarray(y0, np.float64)[mine], np.asarray(thetas, np.float64)[mine]
     key, arrays = _structure(problem, settings)
-    bar = tqdm(total=share, unit="design", delay=1.0, disable=None if progress is None else not progress,
-               file=sys.stderr, leave=False) if index == 0 else None
+    bar = (
+        tqdm(
+            total=share,
+            unit="design",
+            delay=1.0,
+            disable=None if progress is None else not progress,
+            file=sys.stderr,
+            leave=False,
+        )
+        if index == 0
+        else None
+    )
     packed = None
     if len(y0) and jax.default_backend() == "cpu" and _iterative(problem):
         with _errors_as_nan(), gc_paused():
@@ -1780,7 +1856,9 @@ def _in_chunks(key, arrays, y0, thetas, share, chunk, bar):
     limit = chunk or DESIGN_CHUNK
     size = min(1 << max(share - 1, 0).bit_length(), limit) if share <= limit else -(-share // -(-share // limit))
     size = -(-size // len(devices)) * len(devices)
-    sharding = NamedSharding(Mesh(np.array(devices), ("points",)), PartitionSpec("points")) if len(devices) > 1 else None
+    sharding = (
+        NamedSharding(Mesh(np.array(devices), ("points",)), PartitionSpec("points")) if len(devices) > 1 else None
+    )
     run, size = _batch_program(key, arrays, size, y0.shape[1], thetas.shape[1], sharding)
     packed = []
     for start in range(0, max(share, 1), size):

@@ -26,8 +26,12 @@ def sweepable(problem: Problem) -> dict[str, float]:
     values, limit bounds, fixed inputs and (for a scene model) the scene parameters that
     are not variables."""
     keys = {t.output: float(t.value) for t in problem.targets}
-    keys.update({f"{problem.limits[i].output}.{side}": float(getattr(problem.limits[i], side))
-                 for i, side in problem.limit_rows})
+    keys.update(
+        {
+            f"{problem.limits[i].output}.{side}": float(getattr(problem.limits[i], side))
+            for i, side in problem.limit_rows
+        }
+    )
     scene = getattr(problem.model, "scene", None)
     if scene is not None:
         variables = {v.name for v in problem.variables}
@@ -42,8 +46,16 @@ def with_fixed(problem: Problem, names) -> Problem:
     now = sweepable(problem)
     fixed = dict(zip(problem.fixed_names, problem.fixed_values))
     fixed.update({name: now[name] for name in names if name not in fixed})
-    return Problem(problem.model, problem.variables, problem.targets, problem.limits, problem.objective,
-                   report=dict(problem.report_units), converged=problem.converged, fixed=fixed)
+    return Problem(
+        problem.model,
+        problem.variables,
+        problem.targets,
+        problem.limits,
+        problem.objective,
+        report=dict(problem.report_units),
+        converged=problem.converged,
+        fixed=fixed,
+    )
 
 
 def points_of(over: Mapping[str, ArrayLike], grid: bool) -> tuple[dict[str, np.ndarray], tuple[int, ...]]:
@@ -118,7 +130,9 @@ def sweep(
         if key not in known:
             raise ValueError(f"{key}: not a sweepable input of the problem; expected one of {', '.join(known)}")
     points, shape = points_of(over, grid)
-    rows = [t.output for t in problem.targets] + [f"{problem.limits[i].output}.{side}" for i, side in problem.limit_rows]
+    rows = [t.output for t in problem.targets] + [
+        f"{problem.limits[i].output}.{side}" for i, side in problem.limit_rows
+    ]
     problem = with_fixed(problem, [key for key in points if key not in rows])
     columns = rows + list(problem.fixed_names)
     arrays = _host(problem).arrays
@@ -130,7 +144,15 @@ def sweep(
     units = {t.output: t.unit for t in problem.targets}
     units.update({f"{lim.output}.{side}": lim.unit for lim in problem.limits for side in lim.sides})
     units.update(over_units or {})
-    solution, seconds = solve_batch(problem, y0, thetas, settings_of(rtol, atol, max_steps), chunk=chunk, progress=progress,
-                                    continuation=continuation)
-    return DesignSweep.from_core(problem, solution, thetas, seconds, over=points, shape=shape,
-                                 over_units={key: units.get(key) for key in points})
+    solution, seconds = solve_batch(
+        problem,
+        y0,
+        thetas,
+        settings_of(rtol, atol, max_steps),
+        chunk=chunk,
+        progress=progress,
+        continuation=continuation,
+    )
+    return DesignSweep.from_core(
+        problem, solution, thetas, seconds, over=points, shape=shape, over_units={key: units.get(key) for key in points}
+    )

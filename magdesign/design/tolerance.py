@@ -58,9 +58,10 @@ from magdesign.scene import AbstractScene, Loads, loads_from_spec, outputs, para
 from magdesign.scene import effects as fx
 from magdesign.scene._spec import check_keys, parameter_unit, sub_table
 from magdesign.scene.build import NDFEB_DRIFT
+from magdesign.spec.keys import KEYS, fields
 from magdesign.units import SpecError, convert, echo, parse, written_unit
 
-DISTRIBUTIONS = ("normal", "uniform")
+DISTRIBUTIONS = tuple(KEYS["design.tolerances.distribution"].choices)
 # The standard deviation of a unit variate: N(0, 1), or uniform on [-1, 1].
 _UNIT_STD = {"normal": 1.0, "uniform": 1.0 / math.sqrt(3.0)}
 # Inputs that are effects' values: spec key -> (effect class, its field, SI unit, per sensor (x, y, z)?).
@@ -140,8 +141,9 @@ class ToleranceProblem(eqx.Module):
     @property
     def unit_std(self) -> np.ndarray:
         """(D,) the standard deviation of each unit variate (1, or 1/sqrt(3) if uniform)."""
-        return np.concatenate([np.full(max(1, math.prod(t.components(self.sensors))), _UNIT_STD[t.distribution])
-                               for t in self.inputs])
+        return np.concatenate(
+            [np.full(max(1, math.prod(t.components(self.sensors))), _UNIT_STD[t.distribution]) for t in self.inputs]
+        )
 
     @property
     def uniform(self) -> np.ndarray:
@@ -175,8 +177,11 @@ def _with_effect(scene, name, spec):
     if any(isinstance(effect, cls) for effect in scene.effects):
         return scene
     if name == "temperature":
-        coefficient = parse(spec.get("scene", {}).get("temperature_coefficient", NDFEB_DRIFT), "1/K",
-                            key="scene.temperature_coefficient")
+        coefficient = parse(
+            spec.get("scene", {}).get("temperature_coefficient", NDFEB_DRIFT),
+            "1/K",
+            key="scene.temperature_coefficient",
+        )
         effect = fx.TemperatureDrift(coefficient=jnp.asarray(coefficient), temperature_change=jnp.asarray(0.0))
     else:
         effect = cls(**{field: jnp.zeros(3)})
@@ -196,8 +201,10 @@ def tolerance_problem_from_spec(spec: dict, *, fidelity: str | None = None) -> T
     if default not in DISTRIBUTIONS:
         raise SpecError(f"design.tolerances.distribution: expected one of 'normal', 'uniform', got {echo(default)}")
     if not table:
-        raise SpecError("design.tolerances: expected at least one toleranced input (a scene parameter, placement, "
-                        "tilt or temperature)")
+        raise SpecError(
+            "design.tolerances: expected at least one toleranced input (a scene parameter, placement, "
+            "tilt or temperature)"
+        )
     known = parameters(scene)
     sensors = int(scene.sensor_poses()[0].shape[0])
     inputs = []
@@ -205,7 +212,7 @@ def tolerance_problem_from_spec(spec: dict, *, fidelity: str | None = None) -> T
         where = f"design.tolerances.{name}"
         distribution = default
         if isinstance(entry, dict):
-            check_keys(where, entry, ("value", "distribution"))
+            check_keys(where, entry, fields("design.tolerances.*"))
             if "value" not in entry:
                 raise SpecError(f"{where}.value: missing; expected the tolerance's size")
             distribution = entry.get("distribution", default)
@@ -221,8 +228,10 @@ def tolerance_problem_from_spec(spec: dict, *, fidelity: str | None = None) -> T
         elif name in known:
             unit, per_axis = parameter_unit(name), False
         else:
-            raise SpecError(f"{where}: unknown input; expected a scene parameter ({', '.join(sorted(known))}), "
-                            "placement, tilt or temperature")
+            raise SpecError(
+                f"{where}: unknown input; expected a scene parameter ({', '.join(sorted(known))}), "
+                "placement, tilt or temperature"
+            )
         size, relative = _size(entry, unit, where, per_axis)
         shown = entry if isinstance(entry, str) else echo(entry)
         inputs.append(Tolerance(name, jnp.asarray(size), relative, distribution, shown))
@@ -353,21 +362,36 @@ class ToleranceResult(eqx.Module):
             if "value" in bounds:
                 judged = f"±{shown(name, bounds['tolerance'])}" if "tolerance" in bounds else "(no tolerance)"
             else:
-                judged = " ".join(f"{'<=' if s == 'upper' else '>='} {shown(name, bounds[s])}" for s in ("upper", "lower")
-                                  if s in bounds)
+                judged = " ".join(
+                    f"{'<=' if s == 'upper' else '>='} {shown(name, bounds[s])}"
+                    for s in ("upper", "lower")
+                    if s in bounds
+                )
             failing = "" if entry["failing"] is None else f"{100 * entry['failing']:.3g} %"
             spread = [entry[key] for key in ("nominal", "mean", "std", "std_first_order")]
-            rows.append([name, *(shown(name, v) for v in spread), shown(name, entry["percentiles"]["0.1"]),
-                         shown(name, entry["percentiles"]["99.9"]), judged, failing])
+            rows.append(
+                [
+                    name,
+                    *(shown(name, v) for v in spread),
+                    shown(name, entry["percentiles"]["0.1"]),
+                    shown(name, entry["percentiles"]["99.9"]),
+                    judged,
+                    failing,
+                ]
+            )
         lines = _columns(rows)
         lost = [f"{count} {why.replace('_', ' ')}" for why, count in self.unusable.items() if count]
-        lines.append(f"yield: {100 * self.yield_fraction:.4g} % ± {100 * self.yield_stderr:.2g} % of {self.samples} "
-                     f"samples meet every judged target and limit (Monte Carlo {self.seconds:.3g} s)"
-                     + (f"; failing as unusable: {', '.join(lost)}" if lost else ""))
-        lines.append("inputs that matter most: sigma_i |d output / d input_i| at the design (first order), the same "
-                     "from the samples (Monte Carlo: regression slope x sigma_i; inputs whose slope is within noise, "
-                     f"{NOISE_SIGMAS:g} std / sqrt(samples), and first order 0 are left out), and the input's share "
-                     "of the first-order variance")
+        lines.append(
+            f"yield: {100 * self.yield_fraction:.4g} % ± {100 * self.yield_stderr:.2g} % of {self.samples} "
+            f"samples meet every judged target and limit (Monte Carlo {self.seconds:.3g} s)"
+            + (f"; failing as unusable: {', '.join(lost)}" if lost else "")
+        )
+        lines.append(
+            "inputs that matter most: sigma_i |d output / d input_i| at the design (first order), the same "
+            "from the samples (Monte Carlo: regression slope x sigma_i; inputs whose slope is within noise, "
+            f"{NOISE_SIGMAS:g} std / sqrt(samples), and first order 0 are left out), and the input's share "
+            "of the first-order variance"
+        )
         rows = [["output", "input", "first order", "Monte Carlo", "share"]]
         for name, groups in self.sensitivities.items():
             total = sum(entry["first_order"] ** 2 for entry in groups.values())
@@ -375,8 +399,15 @@ class ToleranceResult(eqx.Module):
             groups = {g: e for g, e in groups.items() if e["first_order"] > 0 or e["monte_carlo"] > noise}
             for index, (group, entry) in enumerate(list(groups.items())[:top]):
                 share = f"{100 * entry['first_order'] ** 2 / total:.3g} %" if total > 0 else "-"
-                rows.append([name if index == 0 else "", group, shown(name, entry["first_order"]),
-                             shown(name, entry["monte_carlo"]), share])
+                rows.append(
+                    [
+                        name if index == 0 else "",
+                        group,
+                        shown(name, entry["first_order"]),
+                        shown(name, entry["monte_carlo"]),
+                        share,
+                    ]
+                )
         lines.extend(_columns(rows))
         return "\n".join(lines)
 
@@ -436,7 +467,12 @@ def _groups(labels, contributions):
 
 
 def monte_carlo(
-    tp: ToleranceProblem, values: dict, *, samples: int = 10_000, seed: int = 0, chunk: int = CHUNK,
+    tp: ToleranceProblem,
+    values: dict,
+    *,
+    samples: int = 10_000,
+    seed: int = 0,
+    chunk: int = CHUNK,
     progress: bool | None = None,
 ) -> ToleranceResult:
     """The design at ``values`` ({variable: SI}) under its tolerances, by Monte Carlo.
@@ -516,7 +552,9 @@ def monte_carlo(
             "mean": float(finite.mean()) if finite.size else math.nan,
             "std": float(finite.std()) if finite.size else math.nan,
             "std_first_order": float(np.sqrt(np.sum(first**2))),
-            "percentiles": {f"{p:g}": float(np.percentile(finite, p)) if finite.size else math.nan for p in PERCENTILES},
+            "percentiles": {
+                f"{p:g}": float(np.percentile(finite, p)) if finite.size else math.nan for p in PERCENTILES
+            },
             "bounds": bounds.get(name, {}),
             "failing": None if rows is None else float(1.0 - rows.mean()),
         }
@@ -530,11 +568,16 @@ def monte_carlo(
     fraction = float(passing.mean())
     return ToleranceResult(
         parameters={name: float(value) for name, value in values.items()},
-        samples=samples, seed=seed, seconds=seconds,
-        yield_fraction=fraction, yield_stderr=math.sqrt(fraction * (1.0 - fraction) / samples),
-        outputs=report, sensitivities=sensitivities,
+        samples=samples,
+        seed=seed,
+        seconds=seconds,
+        yield_fraction=fraction,
+        yield_stderr=math.sqrt(fraction * (1.0 - fraction) / samples),
+        outputs=report,
+        sensitivities=sensitivities,
         unusable={"nonfinite": int(nonfinite.sum()), "not_converged": int(not_converged.sum())},
-        values={name: drawn[name] for name in shown}, units=_units(problem),
+        values={name: drawn[name] for name in shown},
+        units=_units(problem),
     )
 
 
@@ -596,19 +639,31 @@ class RobustResult(eqx.Module):
         return self.design.parameters
 
     def to_json(self) -> dict:
-        return {**self.design.to_json(), "status": self.status, "k": self.k, "sigma": dict(self.sigma),
-                "rounds": self.rounds, "settled": self.settled, "why": self.why}
+        return {
+            **self.design.to_json(),
+            "status": self.status,
+            "k": self.k,
+            "sigma": dict(self.sigma),
+            "rounds": self.rounds,
+            "settled": self.settled,
+            "why": self.why,
+        }
 
     def table(self) -> str:
-        held = ", ".join(f"{name} at {self.k:g} x {format_quantity(value, self.design.units.get(name))}"
-                         for name, value in self.sigma.items())
+        held = ", ".join(
+            f"{name} at {self.k:g} x {format_quantity(value, self.design.units.get(name))}"
+            for name, value in self.sigma.items()
+        )
         state = f"settled in {self.rounds} rounds" if self.settled else f"not settled after {self.rounds} rounds"
-        return (f"{self.design.table()}\nlimits held at k sigma: {held} ({state}{': ' + self.why if self.why else ''})"
-                f"\nstatus: {self.status}")
+        return (
+            f"{self.design.table()}\nlimits held at k sigma: {held} ({state}{': ' + self.why if self.why else ''})"
+            f"\nstatus: {self.status}"
+        )
 
 
-def robust_solve(tp: ToleranceProblem, k: float, *, start: dict | None = None, rounds: int = ROBUST_ROUNDS,
-                 rtol: float = ROBUST_RTOL) -> RobustResult:
+def robust_solve(
+    tp: ToleranceProblem, k: float, *, start: dict | None = None, rounds: int = ROBUST_ROUNDS, rtol: float = ROBUST_RTOL
+) -> RobustResult:
     """Solve the design with every limit held at ``k`` first-order sigmas of its output:
     ``output + k sigma <= upper``, ``output - k sigma >= lower``.
 
@@ -640,7 +695,7 @@ def robust_solve(tp: ToleranceProblem, k: float, *, start: dict | None = None, r
     sigma = sigmas(tp, values)
     limited = {lim.output: lim for lim in problem.limits}
     result, why, settled = None, "", False
-    for round_ in range(1, rounds + 1):
+    for round_ in range(1, rounds + 1):  # noqa: B007 (the rounds taken, returned below)
         try:
             shifted = shifted_problem(problem, k, sigma)
         except ValueError as error:
@@ -666,8 +721,15 @@ def robust_solve(tp: ToleranceProblem, k: float, *, start: dict | None = None, r
 def describe(tp: ToleranceProblem) -> dict:
     """{input: {"size": SI or fraction (a list of 3 per axis), "relative", "distribution",
     "written"}}: the tolerances as read, for reports."""
-    return {t.name: {"size": np.asarray(t.size).tolist(), "relative": t.relative, "distribution": t.distribution,
-                     "written": t.written} for t in tp.inputs}
+    return {
+        t.name: {
+            "size": np.asarray(t.size).tolist(),
+            "relative": t.relative,
+            "distribution": t.distribution,
+            "written": t.written,
+        }
+        for t in tp.inputs
+    }
 
 
 def tolerance_lines(tp: ToleranceProblem) -> str:
@@ -702,7 +764,7 @@ def plot_tolerance(result: ToleranceResult, path, *, robust: ToleranceResult | N
     rows = max(1, -(-len(names) // columns))
     figure = Figure(figsize=(4.0 * columns, 2.9 * rows))
     axes = figure.subplots(rows, columns, squeeze=False).ravel()
-    for axis in axes[len(names):]:
+    for axis in axes[len(names) :]:
         axis.set_visible(False)
     for axis, name in zip(axes, names):
         unit = result.units.get(name)
@@ -728,8 +790,10 @@ def plot_tolerance(result: ToleranceResult, path, *, robust: ToleranceResult | N
             else:
                 far.append(f"{'<=' if side == 'upper' else '>='} {shown:.4g}")
         axis.set_xlabel(f"{name} ({unit or 'SI'})")
-        axis.set_title(f"{name}: bounds dashed, nominal dotted" + (f"; {', '.join(far)} off the picture" if far else ""),
-                       fontsize=8)
+        axis.set_title(
+            f"{name}: bounds dashed, nominal dotted" + (f"; {', '.join(far)} off the picture" if far else ""),
+            fontsize=8,
+        )
         axis.legend(fontsize=7)
         axis.grid(alpha=0.3)
     yields = [f"{label} {100 * run.yield_fraction:.3g} %" for label, run, _ in runs]

@@ -1,10 +1,10 @@
 """Magnetic sources as pure JAX kernels (SI: positions in m, fields in T)."""
 
-from magdesign.fields.film import film as film
-from magdesign.fields.film import film_angle as film_angle
-from magdesign.fields.film import film_magnitude as film_magnitude
+from magdesign.fields.cuboid import cuboid as cuboid
+from magdesign.fields.cuboid import cuboid_tensor as cuboid_tensor
 from magdesign.fields.cylinder import cylinder as cylinder
 from magdesign.fields.cylinder import cylinder_on_axis as cylinder_on_axis
 from magdesign.fields.dipole import dipole as dipole
-from magdesign.fields.cuboid import cuboid as cuboid
-from magdesign.fields.cuboid import cuboid_tensor as cuboid_tensor
+from magdesign.fields.film import film as film
+from magdesign.fields.film import film_angle as film_angle
+from magdesign.fields.film import film_magnitude as film_magnitude

@@ -1,5 +1,5 @@
 """Uniformly magnetised solid cylinder, any direction of polarization: exact field
-everywhere (PHYSICS.md 1.1).
+everywhere.
 
 Layers (as in magpylib): a dimensionless core in the magnet frame with lengths in units
 of the radius, the public wrapper applying scale, polarization and fidelity on top.
@@ -92,8 +92,13 @@ def _binomial(x, n):
 # took 0.1 s to trace per call.
 _MULTIPOLE_ORDERS = range(1, 2 * MULTIPOLE_TERMS, 2)  # Python ints: the binomials' products pass int64
 _MULTIPOLE_MATRIX = np.array(
-    [[-_binomial(-0.5, (l + 2 - m) // 2) * _binomial(-(l + 2 - m), m) / (l + 1) if m <= l else 0.0 for m in _MULTIPOLE_ORDERS]
-     for l in _MULTIPOLE_ORDERS]
+    [
+        [
+            -_binomial(-0.5, (l + 2 - m) // 2) * _binomial(-(l + 2 - m), m) / (l + 1) if m <= l else 0.0
+            for m in _MULTIPOLE_ORDERS
+        ]
+        for l in _MULTIPOLE_ORDERS
+    ]
 )
 
 
@@ -105,14 +110,18 @@ def _on_axis_polynomials(order):
     t, one_t2 = np.polynomial.Polynomial([0.0, 1.0]), np.polynomial.Polynomial([1.0, 0.0, 1.0])
     for n in range(order):
         polynomials.append(polynomials[n].deriv() * one_t2 - (2 * n + 1) * t * polynomials[n])
-    return tuple(tuple(float(c) for c in p.coef) for p in polynomials)  # Python floats: weakly typed, float32 stays float32
+    return tuple(
+        tuple(float(c) for c in p.coef) for p in polynomials
+    )  # Python floats: weakly typed, float32 stays float32
 
 
 # Near the axis (s < AXIS_SERIES_S) the functions are taken from their series in s, whose
-# coefficients are derivatives of the on-axis field f(z) (seed 001's closed form):
+# coefficients are derivatives of the on-axis field f(z) (the closed form of cylinder_on_axis):
 # u = sum_m a_m s^m f^(2m)(z), a_m = 2 (m+1) (-1)^(m+1) / (4^(m+1) ((m+1)!)^2).
 AXIS_SERIES_TERMS = 4
-_AXIS_A = tuple(2 * (m + 1) * (-1) ** (m + 1) / (4 ** (m + 1) * math.factorial(m + 1) ** 2) for m in range(AXIS_SERIES_TERMS))
+_AXIS_A = tuple(
+    2 * (m + 1) * (-1) ** (m + 1) / (4 ** (m + 1) * math.factorial(m + 1) ** 2) for m in range(AXIS_SERIES_TERMS)
+)
 _G_POLYNOMIALS = _on_axis_polynomials(2 * AXIS_SERIES_TERMS + 1)
 
 
@@ -122,7 +131,16 @@ _G_POLYNOMIALS = _on_axis_polynomials(2 * AXIS_SERIES_TERMS + 1)
 # entries it is asked for (``wanted``, static), so that XLA gets, and tracing builds, no
 # more than the call needs.
 # Of one face: p, z, u are its terms, p_z, z_z the ring current's field (their d/dzeta).
-_FACE_NEEDS = {"p": ("p",), "z": ("z",), "u": ("u",), "p_z": ("p_z",), "z_z": ("z_z",), "p_b": ("p_z",), "z_b": ("z_z",), "u_b": ("p",)}
+_FACE_NEEDS = {
+    "p": ("p",),
+    "z": ("z",),
+    "u": ("u",),
+    "p_z": ("p_z",),
+    "z_z": ("z_z",),
+    "p_b": ("p_z",),
+    "z_b": ("z_z",),
+    "u_b": ("p",),
+}
 
 
 def _face_wanted(wanted):
@@ -174,7 +192,9 @@ def _axis_derivatives(z, b, orders):
         powers = [r]  # powers[n] = (1 + zeta^2)^(-(2n + 1) / 2)
         for _ in range(max(orders) + 1):
             powers.append(powers[-1] * r2)
-        faces.append([sum(c * zeta**i for i, c in enumerate(_G_POLYNOMIALS[n])) * powers[n] for n in range(max(orders) + 2)])
+        faces.append(
+            [sum(c * zeta**i for i, c in enumerate(_G_POLYNOMIALS[n])) * powers[n] for n in range(max(orders) + 2)]
+        )
     values = {n: 0.5 * (faces[0][n] - faces[1][n]) for n in orders}
     along_b = {n: 0.5 * (faces[0][n + 1] + faces[1][n + 1]) for n in orders}
     return values, along_b
@@ -220,7 +240,13 @@ def _axis_u(s, z, b, u):
 _WALL_X, _WALL_W = (tuple(float(v) for v in a) for a in np.polynomial.legendre.leggauss(WALL_NODES))
 # For the wall integral: each wanted entry is the integral of this face quantity, or of
 # its zeta-derivative (second element True).
-_WALL_SOURCES = {"p": ("p_z", False), "z": ("z_z", False), "u": ("p", False), "p_z": ("p_z", True), "z_z": ("z_z", True)}
+_WALL_SOURCES = {
+    "p": ("p_z", False),
+    "z": ("z_z", False),
+    "u": ("p", False),
+    "p_z": ("p_z", True),
+    "z_z": ("z_z", True),
+}
 
 
 def _wall_jet(s, z, b, wanted):
@@ -252,7 +278,9 @@ def _multipole_coefficients(b, dtype, along_b):
     m = np.array(_MULTIPOLE_ORDERS)
     b = jnp.asarray(b, dtype)
     powers = m * b ** (m - 1) if along_b else b**m
-    w = jnp.dot(jnp.asarray(_MULTIPOLE_MATRIX, dtype), powers, precision=jax.lax.Precision.HIGHEST)  # no TF32 / bf16 passes
+    w = jnp.dot(
+        jnp.asarray(_MULTIPOLE_MATRIX, dtype), powers, precision=jax.lax.Precision.HIGHEST
+    )  # no TF32 / bf16 passes
     return {l: w[k] for k, l in enumerate(_MULTIPOLE_ORDERS)}
 
 
@@ -277,7 +305,10 @@ def _far_jet(s, z, b, wanted):
 # over the rod's cross-section (the mean-value series of a disc, terms (1/4)^k / (k! (k+1)!)
 # times the k-th power of the transverse Laplacian, which is -d^2/dz^2 off the line) gives
 # dpsi/dz = -(1/4) sum_k (-1/4)^k (2k)! / (k! (k+1)!) P_2k(mu) / r^(2k+1), exact for r > 1.
-_ROD_COEFFICIENTS = {2 * k: -0.25 * (-0.25) ** k * math.factorial(2 * k) / (math.factorial(k) * math.factorial(k + 1)) for k in range(ROD_TERMS)}
+_ROD_COEFFICIENTS = {
+    2 * k: -0.25 * (-0.25) ** k * math.factorial(2 * k) / (math.factorial(k) * math.factorial(k + 1))
+    for k in range(ROD_TERMS)
+}
 
 
 def _infinite_rod(s):
@@ -417,8 +448,8 @@ def _partitioned(s, z, far, zoned):
     """``zoned(s, z, far, zone)`` at every point, each point's value from its own zone.
 
     Elementwise code computes both zones at every point and selects. Here, unless more
-    than MOSTLY_NEAR of the points are near (in a box of +-10 radii about the seed-001
-    magnet 4 % are), the far series (the cheap kernel) run elementwise over every point;
+    than MOSTLY_NEAR of the points are near (in a box of +-10 radii about the dome-Hall
+    sensor's magnet 4 % are), the far series (the cheap kernel) run elementwise over every point;
     then the near points alone, gathered in chunks of PARTITION_CHUNK (their indices in
     order, from one cumulative sum), go through the elliptic integrals and are written
     over their far values. Why this shape, measured at 1e6 points on 2 cores: XLA on CPU
@@ -441,7 +472,9 @@ def _partitioned(s, z, far, zoned):
         s_c, z_c = (a.at[index].get(mode="clip") for a in (s, z))  # padding: the last point, dropped below
         near_values = zoned(s_c, z_c, None, NEAR)
         return near_index, {
-            name: values[name].at[index].set(near_values[name], mode="drop", unique_indices=True, indices_are_sorted=True)
+            name: values[name]
+            .at[index]
+            .set(near_values[name], mode="drop", unique_indices=True, indices_are_sorted=True)
             for name in values
         }
 
@@ -453,8 +486,10 @@ def _partitioned(s, z, far, zoned):
         # field pass through this one).
         slots = -(-n // PARTITION_CHUNK) * PARTITION_CHUNK
         index = jnp.arange(n, dtype=jnp.int32)
-        near_index = (n + jnp.arange(slots, dtype=jnp.int32)).at[jnp.where(far, slots + index, jnp.cumsum(near) - near)].set(
-            index, mode="drop", unique_indices=True
+        near_index = (
+            (n + jnp.arange(slots, dtype=jnp.int32))
+            .at[jnp.where(far, slots + index, jnp.cumsum(near) - near)]
+            .set(index, mode="drop", unique_indices=True)
         )
         filled = lambda i, arrays: jax.lax.cond(i * PARTITION_CHUNK < near_count, chunk, lambda i, a: a, i, arrays)  # noqa: E731
         return jax.lax.fori_loop(0, slots // PARTITION_CHUNK, filled, (near_index, zoned(s, z, None, FAR)))[1]
@@ -499,7 +534,9 @@ def _derived(s, z, b, jet):
     if not _is_large(s):
         return _derived_values(s, z, b, jet, True)
     near_axis = jnp.any(s < AXIS_SERIES_S)
-    return jax.lax.cond(near_axis, lambda: _derived_values(s, z, b, jet, True), lambda: _derived_values(s, z, b, jet, False))
+    return jax.lax.cond(
+        near_axis, lambda: _derived_values(s, z, b, jet, True), lambda: _derived_values(s, z, b, jet, False)
+    )
 
 
 def _derived_values(s, z, b, jet, series):
@@ -512,7 +549,9 @@ def _derived_values(s, z, b, jet, series):
         v_series = _series(s, f, [(m - 1, 2 * m, 2 * m * _AXIS_A[m]) for m in terms])
         out["v"] = _safe_over_s(s, -(2.0 * jet["u"] + jet["z"]), v_series)
         if "p_z" in jet:
-            v_s_series = _series(s, f, [(m - 2, 2 * m, 2 * m * (m - 1) * _AXIS_A[m]) for m in range(2, AXIS_SERIES_TERMS)])
+            v_s_series = _series(
+                s, f, [(m - 2, 2 * m, 2 * m * (m - 1) * _AXIS_A[m]) for m in range(2, AXIS_SERIES_TERMS)]
+            )
             out["v_s"] = _safe_over_s(s, -(2.0 * out["v"] + 0.5 * jet["p_z"]), v_s_series)
         if "u_b" in jet:
             v_b_series = _series(s, f_b, [(m - 1, 2 * m, 2 * m * _AXIS_A[m]) for m in terms])
@@ -699,7 +738,7 @@ def cylinder(
             multipole series beyond MULTIPOLE_SWITCH enclosing-sphere radii, the side
             wall's loops for thin magnets; see the module docstring) or "dipole" (the
             point dipole of the same moment J pi R^2 D / mu0; relative error
-            O((R^2 + D^2/4) / r^2) far away, wrong near), or "axis" (seed 001's on-axis
+            O((R^2 + D^2/4) / r^2) far away, wrong near), or "axis" (the on-axis
             closed form :func:`cylinder_on_axis` taken at the point's height, with the
             diametral part -J_perp f / 2 + chi J_perp of the on-axis field: exact on the
             axis; off the axis an approximation whose error grows like (rho / R)^2, for
@@ -749,7 +788,7 @@ def cylinder_on_axis(
     height: Float[ArrayLike, ""],
     remanence: Float[ArrayLike, ""],
 ) -> Float[Array, "..."]:
-    """B_z (T) on the axis of an axially magnetised cylinder (seed 001, Eq. 1).
+    """B_z (T) on the axis of an axially magnetised cylinder (the dome-Hall paper's Eq. 1).
 
         B_z = Br/2 [(D + z) / sqrt(R^2 + (D + z)^2) - z / sqrt(R^2 + z^2)]
 
@@ -776,5 +815,7 @@ def cylinder_on_axis(
     # they differ (at the centre, z = -D/2), so each form is taken where it is exact.
     a, b = u * s_v, z * s_u
     opposite = u * z < 0.0
-    bracket = double_where(opposite, (a - b) / (s_u * s_v), lambda ab: radius**2 * height * (u + z) / (s_u * s_v * ab), a + b)
+    bracket = double_where(
+        opposite, (a - b) / (s_u * s_v), lambda ab: radius**2 * height * (u + z) / (s_u * s_v * ab), a + b
+    )
     return 0.5 * remanence * bracket

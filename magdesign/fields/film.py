@@ -1,4 +1,5 @@
-"""Sinusoidally magnetised flexible film (seed 004; PHYSICS.md 1.2).
+"""Sinusoidally magnetised flexible film (Yan et al., "Soft magnetic skin for super-resolution
+tactile sensing with force self-decoupling", Sci. Robot. 6, eabc8801 (2021)).
 
 The film's own frame: x along the magnetisation pattern, z the depth below the film's
 bottom face (pointing away from the film, towards the sensors), y along the stripes.
@@ -12,7 +13,7 @@ charges (and checked against an independent charge integration in the tests):
     B = J0 (1 - e^{-kd}) e^{-kz} (sin kx, cos kx)      (Bx, Bz in this frame)
 
 so |B| = J0 (1 - e^{-kd}) e^{-kz} depends on z only and Bx / Bz = tan(kx) on x only:
-normal load (z) changes |B| only, shear (x) the field angle only. Seed 004's Eq. 1 prints
+normal load (z) changes |B| only, shear (x) the field angle only. Yan et al.'s Eq. 1 prints
 M0 (e^{kd} - 1) e^{-kz}, which is this field with z measured from the film's TOP face;
 measured from the bottom face, as here, it is e^{kd} too large. Bz here is the component
 along the depth axis; in a frame whose z axis points up towards the film (a scene's

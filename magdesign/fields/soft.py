@@ -1,4 +1,4 @@
-"""Soft-magnetic bodies by the method of moments (PHYSICS.md 1.3, issue 15).
+"""Soft-magnetic bodies by the method of moments.
 
 A soft body (its own frame: centre at the origin) is split into N equal cuboid cells on
 a regular grid, each of uniform magnetisation M_i (A/m). The field of a cell is exact
@@ -161,7 +161,9 @@ def soft_body(
     if not inside.any():
         raise ValueError(f"cells: {cells!r} puts no cell centre inside the {shape}; ask for more cells")
     if inside.sum() > MAX_CELLS:
-        raise ValueError(f"cells: {cells!r} gives {inside.sum()} cells, more than the {MAX_CELLS} a dense solve holds; ask for fewer")
+        raise ValueError(
+            f"cells: {cells!r} gives {inside.sum()} cells, more than the {MAX_CELLS} a dense solve holds; ask for fewer"
+        )
     index = tuple(tuple(int(i) for i in row) for row in indices[inside])
     cell = sides / jnp.asarray(grid, dtype=sides.dtype)
     # curved bodies: the kept cells' volume made the body's (a cylinder keeps its length)
@@ -170,8 +172,13 @@ def soft_body(
         cell = cell.at[:2].multiply(np.sqrt(np.pi / 4 * grid[0] * grid[1] / filled))
     elif shape == "sphere":
         cell = cell * (np.pi / 6 * np.prod(grid) / inside.sum()) ** (1.0 / 3.0)
-    return SoftBody(cell=cell, permeability=jnp.asarray(permeability, dtype=cell.dtype), grid=grid, index=index,
-                    saturation=saturation)
+    return SoftBody(
+        cell=cell,
+        permeability=jnp.asarray(permeability, dtype=cell.dtype),
+        grid=grid,
+        index=index,
+        saturation=saturation,
+    )
 
 
 def _grid(sides, cells):
@@ -231,8 +238,10 @@ def magnetization(body: SoftBody, external: Float[ArrayLike, "n 3"]) -> Float[Ar
             (``body.centres``), B_ext = mu0 H_ext (T), shape (N, 3), body frame.
 
     Raises:
-        An error naming the saturation solve (at run time, also under jit) when a
-        saturating body's solve does not converge.
+        ValueError: ``external`` is not of shape (N, 3).
+        RuntimeError: a saturating body's solve does not converge; the message names the
+            saturation solve. Raised at run time, also under jit (equinox's
+            ``EquinoxRuntimeError``, or jax's ``JaxRuntimeError`` from a compiled function).
     """
     external = _external_of(body, external)
     return _solve(interaction(body), [body], external) / MU0
@@ -255,16 +264,20 @@ def coupled_magnetization(
             cell centres (T), (N_b, 3), in that body's frame.
 
     Raises:
-        As :func:`magnetization`.
+        ValueError: an entry of ``externals`` is not of its body's shape (N_b, 3).
+        RuntimeError: a saturating body's solve does not converge, as in :func:`magnetization`.
     """
     externals = [_external_of(body, external) for body, external in zip(bodies, externals)]
     centres = [float_array(centre) for centre in centres]
     matrices = [float_array(matrix) for matrix in matrices]
     rows = [
-        jnp.concatenate([
-            interaction(a) if i == k else _cross_interaction(a, centres[i], matrices[i], b, centres[k], matrices[k])
-            for k, b in enumerate(bodies)
-        ], axis=1)
+        jnp.concatenate(
+            [
+                interaction(a) if i == k else _cross_interaction(a, centres[i], matrices[i], b, centres[k], matrices[k])
+                for k, b in enumerate(bodies)
+            ],
+            axis=1,
+        )
         for i, a in enumerate(bodies)
     ]
     polarization = _solve(jnp.concatenate(rows, axis=0), bodies, jnp.concatenate(externals))
@@ -276,7 +289,9 @@ def _external_of(body, external):
     external = float_array(external)
     n = len(body.index)
     if external.shape != (n, 3):
-        raise ValueError(f"external must hold the field at the body's {n} cell centres, shape ({n}, 3); got {external.shape}")
+        raise ValueError(
+            f"external must hold the field at the body's {n} cell centres, shape ({n}, 3); got {external.shape}"
+        )
     return external
 
 
@@ -295,9 +310,9 @@ def _cross_interaction(a, centre_a, matrix_a, b, centre_b, matrix_b):
 def _per_cell(bodies):
     """Per cell: chi (N, 1) and J_s (N, 1) (T; inf for a linear body)."""
     chi = jnp.concatenate([jnp.full((len(b.index), 1), b.permeability - 1.0) for b in bodies])
-    limit = jnp.concatenate([
-        jnp.full((len(b.index), 1), jnp.inf if b.saturation is None else b.saturation) for b in bodies
-    ])
+    limit = jnp.concatenate(
+        [jnp.full((len(b.index), 1), jnp.inf if b.saturation is None else b.saturation) for b in bodies]
+    )
     return chi, limit
 
 
@@ -323,7 +338,8 @@ def _solve(matrix, bodies, external):
     start = law(linear, 1.0, limit)
     polarization, failed = _saturated(matrix, external, chi, limit, start)
     return eqx.error_if(
-        polarization, failed,
+        polarization,
+        failed,
         f"soft-magnetic saturation: the solve of the cells' magnetisation did not converge in {SATURATION_MAX_STEPS} "
         f"steps (its residual stayed above {SATURATION_RESIDUAL:g} T; check the saturation and the field's size)",
     )
@@ -394,7 +410,9 @@ def _saturated_jvp(primals, tangents):
     return (polarization, failed), (change, np.zeros((), dtype=jax.dtypes.float0))
 
 
-def field(body: SoftBody, magnetization: Float[ArrayLike, "n 3"], points: Float[ArrayLike, "... 3"]) -> Float[Array, "... 3"]:
+def field(
+    body: SoftBody, magnetization: Float[ArrayLike, "n 3"], points: Float[ArrayLike, "... 3"]
+) -> Float[Array, "... 3"]:
     """The body's own flux density B (T) at ``points`` (m, body frame, shape (..., 3)),
     given its cells' magnetisation (A/m, (N, 3)). Inside a cell B = mu0 (H + M)."""
     check_last_axis("points", points, 3)

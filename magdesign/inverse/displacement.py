@@ -12,7 +12,7 @@ solved by optimistix (Levenberg-Marquardt by default, Gauss-Newton on request),
 Starts. A least-squares solver only finds the minimum nearest its start, and reports
 "successful" there whether or not the residual is small. So each reading vector is
 compared with the readings of a table of ``candidates`` displacements (computed once
-per call, as the reference points of seed 003); the solver runs from each of the
+per call, like the 77 reference points of the GMR-inductor paper); the solver runs from each of the
 ``starts`` nearest (in reading space), and the smallest chi2 wins.
 
 Status, in this order of precedence (:class:`InverseStatus`):
@@ -213,5 +213,7 @@ def displacement_grid(
     x: Float[ArrayLike, " nx"], y: Float[ArrayLike, " ny"], z: Float[ArrayLike, " nz"]
 ) -> Float[Array, "n 3"]:
     """All (nx ny nz, 3) combinations of the given x, y, z values (m), x varying slowest."""
-    grid = jnp.meshgrid(jnp.asarray(x, dtype=float), jnp.asarray(y, dtype=float), jnp.asarray(z, dtype=float), indexing="ij")
+    grid = jnp.meshgrid(
+        jnp.asarray(x, dtype=float), jnp.asarray(y, dtype=float), jnp.asarray(z, dtype=float), indexing="ij"
+    )
     return jnp.stack(grid, axis=-1).reshape(-1, 3)

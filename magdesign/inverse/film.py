@@ -1,4 +1,4 @@
-"""Seed 004's closed-form force read-out (Eq. 3) for the film scene.
+"""Yan et al.'s (2021) closed-form force read-out (Eq. 3) for the film scene.
 
     Fz = c1 S E / (k h) ln(|B|(z1) / |B|(z0)) + b1
     Fx = c2 S G / (k h) (phi0 - phi1) + b2

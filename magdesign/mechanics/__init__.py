@@ -1,18 +1,18 @@
 """Mechanics: materials, elastomer layers and domes (SI: m, N, Pa)."""
 
+from magdesign.mechanics.dome import DomeCurve as DomeCurve
+from magdesign.mechanics.dome import DomeResult as DomeResult
+from magdesign.mechanics.dome import dome_compliance as dome_compliance
+from magdesign.mechanics.dome import dome_curve as dome_curve
+from magdesign.mechanics.layer import LayerStiffness as LayerStiffness
+from magdesign.mechanics.layer import compression_modulus as compression_modulus
+from magdesign.mechanics.layer import layer_stiffness as layer_stiffness
+from magdesign.mechanics.layer import shape_factor as shape_factor
 from magdesign.mechanics.materials import AbstractHyperelastic as AbstractHyperelastic
 from magdesign.mechanics.materials import AbstractMaterial as AbstractMaterial
 from magdesign.mechanics.materials import LinearElastic as LinearElastic
 from magdesign.mechanics.materials import MooneyRivlin as MooneyRivlin
 from magdesign.mechanics.materials import NeoHookean as NeoHookean
-from magdesign.mechanics.dome import dome_compliance as dome_compliance
-from magdesign.mechanics.dome import dome_curve as dome_curve
-from magdesign.mechanics.dome import DomeCurve as DomeCurve
-from magdesign.mechanics.dome import DomeResult as DomeResult
-from magdesign.mechanics.layer import compression_modulus as compression_modulus
-from magdesign.mechanics.layer import layer_stiffness as layer_stiffness
-from magdesign.mechanics.layer import LayerStiffness as LayerStiffness
-from magdesign.mechanics.layer import shape_factor as shape_factor
 from magdesign.mechanics.viscoelastic import lag_filter as lag_filter
 from magdesign.mechanics.viscoelastic import lag_pole as lag_pole
 from magdesign.mechanics.viscoelastic import time_constant_from_pole as time_constant_from_pole

@@ -92,7 +92,7 @@ ARMIJO = 0.25
 # Index of the largest Levenberg shift tried (each ten times the previous one; see _factor).
 LEVENBERG_MAX = 12
 # Path following: steps at most, and the Newton iterations at or below which a step doubles
-# and from which on it halves. (At 16, seed 001's dome kept a first step that took 15
+# and from which on it halves. (At 16, the dome-Hall sensor's dome kept a first step that took 15
 # iterations, and the next, as long, failed after PATH_NEWTON_MAX_ITER: 142 iterations for
 # its 11 load levels, against 119 at 12.)
 PATH_MAX_STEPS = 80
@@ -427,8 +427,8 @@ def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
     gradient, the shift hint for the next solve). ``shift``, the hint: the index (see :func:`_factor`)
     of the shift that the last factor needing one found, in this solve or an earlier one
     (0: none yet); a factor that needs a shift resumes its tries a tenth below it. The
-    path's steps need a shift in their first iterations, of index 4 to 6 on seed 001's
-    dome, much the same from step to step, which the tries from index 1 climbed to each
+    path's steps need a shift in their first iterations, of index 4 to 6 on the dome-Hall
+    sensor's dome, much the same from step to step, which the tries from index 1 climbed to each
     time. The hint comes down a tenth with each factor that needs a shift, not with one
     that needs none.
     Converged: the largest entry of the residual (an out-of-balance force, N) is at most
@@ -626,8 +626,16 @@ def _start_path(mesh, step):
     its tangent and stiffness zero, not worked out (see :func:`first_crossings`)."""
     zero = jnp.zeros(mesh.size)
     return Path(
-        zero, jnp.zeros(()), zero, jnp.zeros(()), zero, jnp.asarray(step, float), jnp.asarray(0), jnp.asarray(False),
-        jnp.asarray(False), jnp.asarray(0),
+        zero,
+        jnp.zeros(()),
+        zero,
+        jnp.zeros(()),
+        zero,
+        jnp.asarray(step, float),
+        jnp.asarray(0),
+        jnp.asarray(False),
+        jnp.asarray(False),
+        jnp.asarray(0),
     )
 
 
@@ -657,8 +665,10 @@ def _path_update(params, path, y_new, force_new, tangent_new, ok, iterations, ju
     tangents are not read); ``shift``: Newton's last Levenberg shift index, for the next."""
     factor = jnp.where(iterations <= PATH_EASY_ITER, 2.0, jnp.where(iterations >= PATH_HARD_ITER, 0.5, 1.0))
     step = jnp.where(ok, jnp.maximum(path.step, SNAP_STEP * params[1]) * factor, path.step / 4)
-    tangent, stiffness = (path.tangent, path.stiffness) if tangent_new is None else jax.tree.map(
-        lambda new, old: jnp.where(ok, new, old), tangent_new, (path.tangent, path.stiffness)
+    tangent, stiffness = (
+        (path.tangent, path.stiffness)
+        if tangent_new is None
+        else jax.tree.map(lambda new, old: jnp.where(ok, new, old), tangent_new, (path.tangent, path.stiffness))
     )
     return Path(
         y=jnp.where(ok, y_new, path.y),
@@ -684,8 +694,10 @@ def _hermite_guess(before: Path, after: Path, level):
 
     def at(s, v0, t0, v1, t1):
         return (
-            (2 * s**3 - 3 * s**2 + 1) * v0 + (s**3 - 2 * s**2 + s) * h * t0
-            + (3 * s**2 - 2 * s**3) * v1 + (s**3 - s**2) * h * t1
+            (2 * s**3 - 3 * s**2 + 1) * v0
+            + (s**3 - 2 * s**2 + s) * h * t0
+            + (3 * s**2 - 2 * s**3) * v1
+            + (s**3 - s**2) * h * t1
         )
 
     def halve(_, bracket):
@@ -770,8 +782,8 @@ def first_crossings(mesh, params, levels, max_travel, step):
         y, ok, iterations, H, reaction, shift = newton(mesh, mask, held, force, params, guess, max_iter, path.shift)
         just = jnp.arange(k) == level
         # A solved level's state, inside the step, is a closer lower end for the levels
-        # still pending above it: their Hermite guesses span less of the step (on seed
-        # 001's dome the lightest levels took 12 iterations each from the whole first step).
+        # still pending above it: their Hermite guesses span less of the step (on the
+        # dome-Hall sensor's dome the lightest levels took 12 iterations each from the whole first step).
         still = pending & ~just
         above = jnp.all(jnp.where(still, levels >= levels[level], True))
         closer = solving & ok & jnp.any(still) & above & (y[-1] > before.y[-1]) & (y[-1] < path.y[-1])
@@ -782,7 +794,10 @@ def first_crossings(mesh, params, levels, max_travel, step):
         c = eqx.tree_at(
             lambda c: (c.states, c.converged),
             c,
-            (on_level(just & solving, jnp.broadcast_to(y, blank.shape), c.states), jnp.where(just & solving, ok, c.converged)),
+            (
+                on_level(just & solving, jnp.broadcast_to(y, blank.shape), c.states),
+                jnp.where(just & solving, ok, c.converged),
+            ),
         )
         new = _path_update(params, path, y, reaction, tangent, ok & ~solving, iterations, jump, shift)
         new = jax.tree.map(lambda a, b: jnp.where(solving, b, a), new, path)
@@ -790,9 +805,7 @@ def first_crossings(mesh, params, levels, max_travel, step):
         new = jax.tree.map(lambda a, b: jnp.where(starting, a, b), with_tangent, new)
         crossed = ~starting & ~solving & ok & ~found & (new.force >= levels)
         before = jax.tree.map(lambda a, b: jnp.where(jnp.any(crossed), a, b), path, before)
-        solved_point = eqx.tree_at(
-            lambda p: (p.y, p.force, p.tangent, p.stiffness), before, (y, reaction, *tangent)
-        )
+        solved_point = eqx.tree_at(lambda p: (p.y, p.force, p.tangent, p.stiffness), before, (y, reaction, *tangent))
         before = jax.tree.map(lambda a, b: jnp.where(closer, a, b), solved_point, before)
         return new, before, found | crossed, solved | (just & solving), c, jnp.asarray(True)
 

@@ -1,25 +1,33 @@
-"""Hemispherical dome pressed at its apex by a rigid flat plate (PHYSICS.md 2.3, seed 001).
+"""Hemispherical dome pressed at its apex by a rigid flat plate (the dome of the dome-Hall
+sensor, "Design and Fabrication of a Soft Magnetic Tactile Sensor").
 
 Fidelity levels:
 
-- ``"reissner"``: Reissner's thin-shell point-load stiffness
+- ``"reissner"``: Reissner's thin-shell point-load stiffness (E. Reissner, "Stresses and
+  small displacements of shallow spherical shells", J. Math. Phys. 25 (1946-1947)):
   K = 4 E t^2 / (R sqrt(3 (1 - nu^2))), R = outer_radius - t / 2 the mid-surface radius,
-  E and nu the material's small-strain moduli. Linear, cost ~ microseconds; it leaves out
-  what a thick wall adds (transverse shear, the wall's compression under the plate, large
-  deflections): 0.371 mm/N for seed 001's dome against the published FEM and experiment's
-  0.32 mm/N.
+  E and nu the material's small-strain moduli. Linear, cost ~ microseconds. It leaves out
+  what makes a thick wall softer (transverse shear, the wall's compression under the plate;
+  the most at light loads) and what makes it stiffer at travels of the order of t (the
+  plate's contact spreading over the apex). The dome-Hall sensor's dome (8 mm / 2 mm) at
+  5 N has travelled 0.8 t, and the stiffening wins: Reissner gives 0.371 mm/N against the
+  published FEM and experiment's 0.32 mm/N (the axisymmetric level's secant compliance is
+  1.6 times Reissner's at a travel of 0.2 mm and 0.94 times at 1.6 mm, where the contact
+  reaches a radius of 3.2 mm).
 - ``"axisymmetric"``: finite-strain axisymmetric finite elements of the thick wall
   (9-node quadrilaterals, Q9/P3 volumetric projection, graded towards the apex) with
   penalty contact of a frictionless plate (:mod:`magdesign.mechanics._axisymmetric`). The
   force-travel path is followed with the plate travel held, from the undeformed dome, so
   it passes the points where a thin dome softens and its force falls; a force is found at
   its first crossing on that path and solved there with the force held. Derivatives are
-  exact (implicit). Seed 001's dome at 5 N: see ``benchmarks/mechanics.py`` for the
+  exact (implicit). The dome-Hall sensor's dome at 5 N: see ``benchmarks/mechanics.py`` for the
   travel, its mesh convergence and its cost.
 
 For thin walls the axisymmetric compliance tends to Reissner's (tested), but slowly: its
-excess is of the order of (t / R) log(R / t) (transverse shear and the wall's local
-compression under the plate) plus the large-deflection softening, about 0.5 d / t.
+excess at a travel of t / 100 is about 8 t / R (transverse shear and the wall's local
+compression under the plate; more at lighter loads), and it falls as the travel grows and
+the plate's contact spreads (at a travel of t: +10 % for t / R = 0.1, -15 % for 0.25,
+R the outer radius).
 """
 
 import functools
@@ -101,8 +109,10 @@ def _check(outer_radius, thickness, material, fidelity, base, mesh):
     if fidelity == "axisymmetric":
         for name, value in (("outer_radius", outer_radius), ("thickness", thickness)):
             if jnp.ndim(value) != 0:
-                raise ValueError(f"{name} must be a scalar (m) at the axisymmetric level (one dome per call: "
-                                 f"jax.vmap for several), got shape {jnp.shape(value)}")
+                raise ValueError(
+                    f"{name} must be a scalar (m) at the axisymmetric level (one dome per call: "
+                    f"jax.vmap for several), got shape {jnp.shape(value)}"
+                )
     Ro, t = _concrete(outer_radius), _concrete(thickness)
     if Ro is not None and t is not None and not np.all(t < Ro):
         raise ValueError(f"thickness must be smaller than outer_radius, got {thickness!r} >= {outer_radius!r}")
@@ -161,6 +171,7 @@ def _axisymmetric_curve(outer_radius, thickness, material, travels, base, mesh):
     states = _axisymmetric.implicit(m, "travel", params, travels, solved)
     forces = jax.vmap(lambda y: _axisymmetric.plate_force(m, y, params))(states)
     radii = jax.vmap(lambda y: _axisymmetric.contact_radius(m, y, fixed))(solved)
+
     def point_result(reached, failed):
         not_reached = DomeResult.where(failed, DomeResult.snapped, DomeResult.max_steps_reached)
         return DomeResult.where(reached, DomeResult.successful, not_reached)
@@ -219,9 +230,9 @@ def dome_compliance(
         max_force: plate force (N), >= 0; a scalar or an array, every force of which is
             found on one followed path. Reissner: the same compliance at every force.
             Axisymmetric: a force below DOME_MIN_TRAVEL_FRACTION t / C_Reissner (5.4 mN
-            for seed 001's dome) is evaluated at that floor (see magdesign._numerics).
+            for the dome-Hall sensor's dome) is evaluated at that floor (see magdesign._numerics).
         fidelity: "reissner" (closed form, linear) or "axisymmetric" (nonlinear FE).
-        base: "bonded" (rim clamped, seed 001) or "sliding" (rim free to slide radially).
+        base: "bonded" (rim clamped, as in the dome-Hall sensor) or "sliding" (rim free to slide radially).
         mesh: (elements through the wall, elements along the meridian), axisymmetric only.
         throw: if True, a solve that did not succeed raises an error naming what failed
             (:class:`DomeResult`); if False, ``(compliance, result)`` is returned instead.
@@ -284,8 +295,10 @@ def dome_curve(
             raise ValueError(f"travels must be a 1-D array of increasing positive plate travels (m), got {travels!r}")
         flat = _concrete(outer_radius - thickness)
         if concrete is not None and flat is not None and concrete[-1] >= flat:
-            raise ValueError(f"travels must stay below outer_radius - thickness = {float(flat)!r} m (the wall "
-                             f"pressed flat), got {float(concrete[-1])!r} m")
+            raise ValueError(
+                f"travels must stay below outer_radius - thickness = {float(flat)!r} m (the wall "
+                f"pressed flat), got {float(concrete[-1])!r} m"
+            )
     if fidelity == "reissner":
         return DomeCurve(travels, travels / reissner, jnp.zeros_like(travels), _successful(travels.shape))
     forces, radii, result = _axisymmetric_curve(

@@ -1,10 +1,10 @@
-"""Elastomer layer of thickness h under a flat contact of area S (PHYSICS.md 2.1).
+"""Elastomer layer of thickness h under a flat contact of area S.
 
 The layer sits between the contact (or a magnet film) and the substrate. Its normal
 stiffness k_n = E_eff S / h and shear stiffness k_s = G S / h (N/m) come at two
 fidelity levels:
 
-- ``"hooke"``: E_eff = E, Young's modulus; seed 004's dP = E dz / h and
+- ``"hooke"``: E_eff = E, Young's modulus; Yan et al.'s (2021) dP = E dz / h and
   Fx = S G dx / h. Exact for a layer free to slide on both faces.
 - ``"bonded"``: a layer bonded on both faces cannot bulge freely and is stiffer in
   compression. For a disc of radius a (S = pi a^2), the shape factor is
@@ -44,9 +44,7 @@ class LayerStiffness(NamedTuple):
     shear: Float[Array, "..."]
 
 
-def shape_factor(
-    *, thickness: Float[ArrayLike, "..."], area: Float[ArrayLike, "..."]
-) -> Float[Array, "..."]:
+def shape_factor(*, thickness: Float[ArrayLike, "..."], area: Float[ArrayLike, "..."]) -> Float[Array, "..."]:
     """S_f = loaded area / free lateral area (-) of a bonded disc: a / (2 h).
 
     ``area`` pi a^2 (m^2) and ``thickness`` h (m), both > 0, broadcast together.

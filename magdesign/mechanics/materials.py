@@ -1,4 +1,4 @@
-"""Elastic materials as strain-energy functions (PHYSICS.md 2.2).
+"""Elastic materials as strain-energy functions.
 
 Each material is an equinox module holding its constants (Pa) and a strain-energy
 density W(F) (J/m^3) of the deformation gradient F (3 x 3, dimensionless). Stresses
@@ -156,7 +156,7 @@ class NeoHookean(AbstractHyperelastic):
     """Compressible neo-Hookean solid: W = mu/2 (Ibar1 - 3) + K/2 (J - 1)^2.
 
     ``mu`` shear modulus (Pa), ``bulk`` bulk modulus K (Pa), both small-strain. PDMS 1:15
-    of seed 002 (E = 750 kPa, nu = 0.49) is ``NeoHookean.from_youngs(E=750e3, nu=0.49)``.
+    of the spin-valve matrix sensor (E = 750 kPa, nu = 0.49) is ``NeoHookean.from_youngs(E=750e3, nu=0.49)``.
     """
 
     mu: Float[ArrayLike, ""]
@@ -190,7 +190,7 @@ class MooneyRivlin(AbstractHyperelastic):
     ``c10`` > 0 and ``c01`` >= 0 (Pa); small-strain shear modulus mu = 2 (c10 + c01).
     ``bulk`` K (Pa) defaults to None, meaning K = DEFAULT_BULK_TO_SHEAR * mu = 1000 mu
     (nearly incompressible, nu = 0.4995); it is evaluated from c10 and c01 when used, so
-    derivatives with respect to c10 and c01 keep the ratio. Seed 001's resin is
+    derivatives with respect to c10 and c01 keep the ratio. The dome-Hall sensor's resin is
     ``MooneyRivlin(c10=0.1182e6, c01=0.1769e6)``.
     """
 

@@ -1,6 +1,7 @@
-"""Viscoelastic rate dependence as a first-order discrete lag (seed 001; PHYSICS.md 2.4).
+"""Viscoelastic rate dependence as a first-order discrete lag.
 
-Seed 001 identifies the sensor's response at 100 Hz as
+The dome-Hall paper ("Design and Fabrication of a Soft Magnetic Tactile Sensor", Eq. 2)
+identifies the sensor's response at 100 Hz as
 
     G(z) = 0.01955 / (1 - 0.9804 z^-1),   i.e.   y[n] = 0.9804 y[n-1] + 0.01955 x[n].
 
@@ -8,7 +9,7 @@ The pole a = exp(-1 / (tau fs)) of a first-order lag sampled at fs gives the tim
 constant tau = -1 / (fs ln a) = 0.505 s for a = 0.9804 at 100 Hz. The numerator is not
 exactly 1 - a = 0.0196: the DC gain is 0.01955 / 0.0196 = 0.9974, i.e. the identified
 sensor settles 0.26 % below its input. :func:`lag_filter` takes that DC gain as
-``gain`` (1 for a pure lag); SEED001_GAIN is the identified value.
+``gain`` (1 for a pure lag); DOME_HALL_GAIN is the identified value.
 """
 
 import jax
@@ -17,24 +18,21 @@ from jaxtyping import Array, ArrayLike, Float
 
 from magdesign._validation import check_positive
 
-SEED001_POLE = 0.9804
-SEED001_NUMERATOR = 0.01955
-SEED001_SAMPLE_RATE = 100.0  # Hz
-SEED001_GAIN = SEED001_NUMERATOR / (1.0 - SEED001_POLE)
+# The dome-Hall paper's Eq. 2: G(z) = DOME_HALL_NUMERATOR / (1 - DOME_HALL_POLE z^-1) at 100 Hz.
+DOME_HALL_POLE = 0.9804
+DOME_HALL_NUMERATOR = 0.01955
+DOME_HALL_SAMPLE_RATE = 100.0  # Hz
+DOME_HALL_GAIN = DOME_HALL_NUMERATOR / (1.0 - DOME_HALL_POLE)
 
 
-def lag_pole(
-    time_constant: Float[ArrayLike, ""], sample_rate: Float[ArrayLike, ""]
-) -> Float[Array, ""]:
+def lag_pole(time_constant: Float[ArrayLike, ""], sample_rate: Float[ArrayLike, ""]) -> Float[Array, ""]:
     """Pole a = exp(-1 / (tau fs)) (-) of a lag with time constant tau (s) sampled at fs (Hz)."""
     check_positive(time_constant=time_constant, unit="s")
     check_positive(sample_rate=sample_rate, unit="Hz")
     return jnp.exp(-1.0 / (jnp.asarray(time_constant) * sample_rate))
 
 
-def time_constant_from_pole(
-    pole: Float[ArrayLike, ""], sample_rate: Float[ArrayLike, ""]
-) -> Float[Array, ""]:
+def time_constant_from_pole(pole: Float[ArrayLike, ""], sample_rate: Float[ArrayLike, ""]) -> Float[Array, ""]:
     """Time constant tau = -1 / (fs ln a) (s) of the discrete pole 0 < a < 1 at fs (Hz)."""
     check_positive(pole=pole, one_minus_pole=1.0 - jnp.asarray(pole))
     check_positive(sample_rate=sample_rate, unit="Hz")

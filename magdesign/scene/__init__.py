@@ -9,14 +9,14 @@ Example::
 """
 
 from magdesign.scene.build import scene_from_spec as scene_from_spec
-from magdesign.scene.core import AbstractScene as AbstractScene
 from magdesign.scene.core import MECHANICS_CONVERGED as MECHANICS_CONVERGED
+from magdesign.scene.core import AbstractScene as AbstractScene
+from magdesign.scene.core import SimulationResult as SimulationResult
 from magdesign.scene.core import outputs as outputs
 from magdesign.scene.core import parameters as parameters
 from magdesign.scene.core import simulate as simulate
 from magdesign.scene.core import simulation_json as simulation_json
 from magdesign.scene.core import simulation_table as simulation_table
-from magdesign.scene.core import SimulationResult as SimulationResult
 from magdesign.scene.core import with_parameters as with_parameters
 from magdesign.scene.effects import EFFECT_NAMES as EFFECT_NAMES
 from magdesign.scene.film_scene import FilmScene as FilmScene

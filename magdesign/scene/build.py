@@ -1,10 +1,11 @@
 """Scenes from parsed TOML specs (units as strings; see the files in examples/).
 
 Tables: [scene] (effects and their options), [magnet], [mechanics], [sensor],
-[geometry], [load], [inductors] (seed 003), [pole] (seed 000). [design] is ignored.
-The [magnet] table's ``shape`` picks the scene type: "cylinder" (seeds 001-003,
-:class:`MagnetScene`), "film" (seed 004, :class:`FilmScene`), "plate" (seed 000,
-:class:`PoleScene`).
+[geometry], [load], [inductors] (the GMR-inductor sensor), [pole] (the magnetic-suspension
+sensor). [design] is ignored. The [magnet] table's ``shape`` picks the scene type:
+"cylinder" (the dome-Hall, spin-valve matrix and GMR-inductor sensors, :class:`MagnetScene`),
+"film" (the film-Hall sensor, :class:`FilmScene`), "plate" (the magnetic-suspension sensor,
+:class:`PoleScene`); docs/references.md names the paper behind each.
 """
 
 import dataclasses
@@ -15,33 +16,29 @@ import jax.numpy as jnp
 import numpy as np
 
 from magdesign.fields.cylinder import FIDELITIES as CYLINDER_FIDELITIES
+from magdesign.fields.soft import SIZE_LENGTHS, soft_body
+from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, time_constant_from_pole
 from magdesign.mechanics.dome import BASES as DOME_BASES
 from magdesign.mechanics.dome import FIDELITIES as DOME_FIDELITIES
 from magdesign.mechanics.layer import FIDELITIES as LAYER_FIDELITIES
-from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, time_constant_from_pole
-from magdesign.mechanics.viscoelastic import SEED001_POLE, SEED001_SAMPLE_RATE
+from magdesign.mechanics.viscoelastic import DOME_HALL_POLE, DOME_HALL_SAMPLE_RATE
 from magdesign.scene import effects as fx
 from magdesign.scene._spec import Table, check_tables
 from magdesign.scene.film_scene import FilmScene
 from magdesign.scene.loads import loads_from_spec
 from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadout
 from magdesign.scene.mechanics import Dome, Layer
-from magdesign.fields.soft import SIZE_LENGTHS, soft_body
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions
-from magdesign.transducers import SpinValve, ak8963, inesc_spin_valve, mlx90393, panasonic_meander
-from magdesign.units import SpecError, echo, parse, uT
+from magdesign.spec.keys import KEYS, fields
+from magdesign.units import SpecError, echo, uT
 
-TABLES = ("scene", "magnet", "mechanics", "sensor", "geometry", "load", "inductors", "pole", "soft")
-HALL_PRESETS = {"AK8963": ak8963, "MLX90393": mlx90393}
-VALVE_PRESETS = {"INESC": inesc_spin_valve, "PANASONIC": panasonic_meander}
-# NVE AA003-02 (seed 003), from NVE's AA-series catalogue: a 5 kOhm bridge, sensitivity
-# 2.0-3.2 mV/V/Oe (mid value 2.6 mV/V per 0.1 mT: 26 /T of output per supply volt),
-# linear to 14 Oe (1.4 mT), saturating at 20 Oe (2 mT); 5 V supply (1 mA through 5 kOhm).
-NVE_AA003_SENSITIVITY = 26.0
-NVE_AA003_LINEAR = 1.4e-3
-NVE_AA003_SATURATION = 2.0e-3
-# Seed 002's read-out ADC: 24-bit over 2.048 V full scale, 20-25 uV peak-to-peak noise,
+# The scene's tables (all of the key table's but [design]) and the sensor parts by model.
+TABLES = tuple(dict.fromkeys(key.table.split(".")[0] for key in KEYS.values() if key.table.split(".")[0] != "design"))
+_PRESETS = KEYS["sensor.preset"].presets
+HALL_PRESETS = {name: _PRESETS[name] for name in ("AK8963", "MLX90393")}
+VALVE_PRESETS = {name: _PRESETS[name] for name in ("INESC", "PANASONIC")}
+# The spin-valve matrix's read-out ADC (the spin-valve paper, Sections 3.5 and 4.1-4.2): 24-bit over 2.048 V full scale, 20-25 uV peak-to-peak noise,
 # i.e. a standard deviation of about 22.5 uV / 6.6 (peak-to-peak of a Gaussian ~ 6.6 sigma).
 ADC_FULL_SCALE = 2.048
 ADC_BITS = 24
@@ -55,15 +52,50 @@ def _material(table):
     if name == "mooney_rivlin":
         return MooneyRivlin(c10=jnp.asarray(table.quantity("c10", "Pa")), c01=jnp.asarray(table.quantity("c01", "Pa")))
     if name == "neo_hookean":
-        return NeoHookean(mu=jnp.asarray(table.quantity("shear_modulus", "Pa")), bulk=jnp.asarray(table.quantity("bulk_modulus", "Pa")))
-    return LinearElastic(E=jnp.asarray(table.quantity("youngs_modulus", "Pa")), nu=jnp.asarray(table.quantity("poisson_ratio", "1")))
+        return NeoHookean(
+            mu=jnp.asarray(table.quantity("shear_modulus", "Pa")),
+            bulk=jnp.asarray(table.quantity("bulk_modulus", "Pa")),
+        )
+    return LinearElastic(
+        E=jnp.asarray(table.quantity("youngs_modulus", "Pa")), nu=jnp.asarray(table.quantity("poisson_ratio", "1"))
+    )
 
 
 def check_wall(thickness, outer_radius, key="mechanics.thickness"):
     """SpecError naming ``key`` unless a dome's wall (m) is thinner than its outer radius (m)."""
     if not thickness < outer_radius:
-        raise SpecError(f"{key}: a {thickness * 1e3:g} mm wall does not fit in a dome of outer radius "
-                        f"{outer_radius * 1e3:g} mm; expected a wall thinner than the radius")
+        raise SpecError(
+            f"{key}: a {thickness * 1e3:g} mm wall does not fit in a dome of outer radius "
+            f"{outer_radius * 1e3:g} mm; expected a wall thinner than the radius"
+        )
+
+
+# A magnet read back from a solved design held on its part's top (the guard embed >= 0, met
+# to the solver's tolerance) touches it to this relative tolerance.
+CONTACT_RTOL = 1e-9
+
+
+def check_carried(gap, height, mechanics):
+    """SpecError naming geometry.gap unless the magnet (near face ``gap`` (m) above the
+    sensor plane, ``height`` (m) tall) touches the part that carries it (to
+    :data:`CONTACT_RTOL`): on or in a layer (gap <= its thickness), or at a dome's apex (its
+    near face at or below the outer apex, its far face at or above the inner apex)."""
+    if isinstance(mechanics, Layer):
+        top = float(mechanics.thickness)
+        if gap > top * (1.0 + CONTACT_RTOL):
+            raise SpecError(
+                f"geometry.gap: a magnet whose face is {gap * 1e3:g} mm above the chips floats above the "
+                f"{top * 1e3:g} mm layer that carries it (mechanics.thickness); expected a gap at most the "
+                "layer's thickness (the magnet on or in the layer)"
+            )
+    if isinstance(mechanics, Dome):
+        outer, inner = float(mechanics.outer_radius), float(mechanics.outer_radius - mechanics.thickness)
+        if not (inner * (1.0 - CONTACT_RTOL) <= gap + height and gap <= outer * (1.0 + CONTACT_RTOL)):
+            raise SpecError(
+                f"geometry.gap: a {height * 1e3:g} mm magnet whose face is {gap * 1e3:g} mm above the chips "
+                f"misses the apex of the dome that carries it (its wall spans {inner * 1e3:g} to "
+                f"{outer * 1e3:g} mm); expected a gap from {(inner - height) * 1e3:g} to {outer * 1e3:g} mm"
+            )
 
 
 def _mechanics(spec, fidelity, models=("dome", "layer")):
@@ -93,8 +125,10 @@ def _mechanics(spec, fidelity, models=("dome", "layer")):
             raise SpecError(f"fidelity: expected one of {', '.join(map(repr, levels))} for a {model}, got {fidelity!r}")
         mechanics = dataclasses.replace(mechanics, fidelity=fidelity)
     if mechanics.fidelity == "axisymmetric" and isinstance(mechanics.material, LinearElastic):
-        raise SpecError("mechanics.material: the axisymmetric dome needs a finite-strain law (mooney_rivlin or "
-                        "neo_hookean); 'linear' holds for the reissner level only")
+        raise SpecError(
+            "mechanics.material: the axisymmetric dome needs a finite-strain law (mooney_rivlin or "
+            "neo_hookean); 'linear' holds for the reissner level only"
+        )
     return mechanics
 
 
@@ -104,10 +138,7 @@ def _sensor_layout(table):
         grid = grid_positions(_grid(table), table.quantity("pitch", "m"))
         positions = np.asarray(grid) - [0.0, 0.0, table.quantity("depth", "m", default=0.0)]
     elif table.has("positions"):
-        raw = table._get("positions", None)
-        if not isinstance(raw, list) or not all(isinstance(row, list) and len(row) == 3 for row in raw):
-            raise SpecError(f"sensor.positions: expected a list of [x, y, z] quantities in m, got {echo(raw)}")
-        positions = np.array([[parse(value, "m", key="sensor.positions") for value in row] for row in raw])
+        positions = np.array(table.points("positions", default=None))
     else:
         positions = np.zeros((1, 3))
     orientation = table.choice("orientation", ("aligned", "radial"), default="aligned")
@@ -126,8 +157,7 @@ def _grid(table):
 
 
 # Reading-stage option keys of [scene], read only for listed effects.
-_EFFECT_KEYS = ("temperature_coefficient", "temperature_change", "placement", "tilt", "lag_time_constant",
-                "area", "quadrature", "background", "saturation_limit", "noise", "lsb")
+_EFFECT_KEYS = tuple(key for key in fields("scene") if key != "effects")
 
 
 def _effects(spec, reading_unit, *, saturation, lsb, noise):
@@ -154,7 +184,9 @@ def _effects(spec, reading_unit, *, saturation, lsb, noise):
         "placement": lambda: fx.Placement(offsets=vector("placement", "m", [200e-6, 0.0, 0.0])),
         "chip_tilt": lambda: fx.ChipTilt(angles=vector("tilt", "rad", [10.0 * np.pi / 180, 0.0, 0.0])),
         "viscoelastic_lag": lambda: fx.ViscoelasticLag(
-            time_constant=scalar("lag_time_constant", "s", float(time_constant_from_pole(SEED001_POLE, SEED001_SAMPLE_RATE)))
+            time_constant=scalar(
+                "lag_time_constant", "s", float(time_constant_from_pole(DOME_HALL_POLE, DOME_HALL_SAMPLE_RATE))
+            )
         ),
         "area_averaging": lambda: fx.AreaAveraging(
             size=vector("area", "m", [200e-6, 95e-6]), points=table.integer("quadrature", default=3)
@@ -195,9 +227,7 @@ def _posed_tables(raw, key, moves):
     for index, item in enumerate(raw):
         name = f"{key}[{index}]"
         table = Table({name: item}, name)
-        flag = table._get("moves", moves)
-        if not isinstance(flag, bool):
-            raise SpecError(f"{name}.moves: expected true or false, got {echo(flag)}")
+        flag = table.flag("moves", moves)
         centre = jnp.asarray(table.quantities("position", "m", length=3))
         angles = jnp.asarray(table.quantities("rotation", "rad", length=3, default=[0.0, 0.0, 0.0]))
         yield name, table, centre, angles, flag
@@ -249,9 +279,18 @@ def _soft_parts(spec):
         permeability = table.quantity("permeability", "1")
         saturation = _saturation(table, name, permeability)
         grid = _soft_grid(f"{name}.cells", shape, size, table.integer("cells", default=SOFT_CELLS), permeability)
-        parts.append(SoftPart(size=tuple(jnp.asarray(v) for v in size), permeability=jnp.asarray(permeability),
-                              centre=tuple(centre), angles=angles, shape=shape, grid=grid, moves=moves,
-                              saturation=saturation))
+        parts.append(
+            SoftPart(
+                size=tuple(jnp.asarray(v) for v in size),
+                permeability=jnp.asarray(permeability),
+                centre=tuple(centre),
+                angles=angles,
+                shape=shape,
+                grid=grid,
+                moves=moves,
+                saturation=saturation,
+            )
+        )
     return tuple(parts)
 
 
@@ -272,13 +311,19 @@ def _cylinder_scene(spec, fidelity):
     extra = _extra_magnets(magnet)
     magnet.done()
     parts = _soft_parts(spec)
-    posed = [key for key, value in (("direction", direction), ("offset", offset), ("rotation", magnet_angles)) if value is not None]
+    posed = [
+        key
+        for key, value in (("direction", direction), ("offset", offset), ("rotation", magnet_angles))
+        if value is not None
+    ]
     if field_fidelity == "axis" and (posed or extra):
         key = posed[0] if posed else "extra"
         raise SpecError(f"magnet.{key}: fidelity 'axis' holds for one axial magnet on the sensors' axis; use 'exact'")
     if field_fidelity == "axis" and parts:
-        raise SpecError("magnet.fidelity: 'axis' is the magnet's field on its axis, and the [[soft]] parts read it "
-                        "off the axis; use 'exact'")
+        raise SpecError(
+            "magnet.fidelity: 'axis' is the magnet's field on its axis, and the [[soft]] parts read it "
+            "off the axis; use 'exact'"
+        )
     mechanics = _mechanics(spec, fidelity)
     sensor = Table(spec, "sensor")
     model = sensor.choice("model", ("hall3d", "spin_valve", "gmr"))
@@ -292,32 +337,32 @@ def _cylinder_scene(spec, fidelity):
             preset = sensor.choice("preset", tuple(VALVE_PRESETS))
             valve = VALVE_PRESETS[preset]()
         else:
-            sensor.choice("preset", ("AA003-02",))
-            valve = SpinValve(resistance=5e3, sensitivity=NVE_AA003_SENSITIVITY, bias_current=1e-3,
-                              linear_range=NVE_AA003_LINEAR, saturation_field=NVE_AA003_SATURATION)
+            valve = _PRESETS[sensor.choice("preset", ("AA003-02",))]()
         amplification = sensor.quantity("amplification", "1", default=1.0)
         differential = model == "gmr"
         transducer = SpinValveReadout(valve, jnp.asarray(amplification), differential)
         positions, angles = _sensor_layout(sensor)
         sensor.done()
-        effects = _effects(spec, "V", saturation=ADC_FULL_SCALE, lsb=ADC_FULL_SCALE / 2 ** (ADC_BITS - 1), noise=ADC_NOISE)
+        effects = _effects(
+            spec, "V", saturation=ADC_FULL_SCALE, lsb=ADC_FULL_SCALE / 2 ** (ADC_BITS - 1), noise=ADC_NOISE
+        )
     if field_fidelity == "axis" and np.any(np.asarray(positions)[:, :2] != 0.0):
         raise SpecError("magnet.fidelity: 'axis' needs every sensor on the magnet's axis (x = y = 0)")
     off_axis = [effect.name for effect in effects if effect.name in ("placement", "area_averaging")]
     if field_fidelity == "axis" and off_axis:
-        raise SpecError(f"magnet.fidelity: 'axis' holds on the magnet's axis only, and the {off_axis[0]} effect "
-                        "reads the field off it; use 'exact'")
+        raise SpecError(
+            f"magnet.fidelity: 'axis' holds on the magnet's axis only, and the {off_axis[0]} effect "
+            "reads the field off it; use 'exact'"
+        )
     geometry = Table(spec, "geometry")
     gap = geometry.quantity("gap", "m")
     geometry.done()
+    check_carried(gap, height, mechanics)
     inductors = None
     if "inductors" in spec:
         table = Table(spec, "inductors")
-        raw = table._get("positions", None)
-        if not isinstance(raw, list) or not all(isinstance(row, list) and len(row) == 3 for row in raw):
-            raise SpecError(f"inductors.positions: expected a list of [x, y, z] quantities in m, got {echo(raw)}")
         inductors = Inductors(
-            positions=jnp.asarray([[parse(v, "m", key="inductors.positions") for v in row] for row in raw]),
+            positions=jnp.asarray(table.points("positions")),
             area=jnp.asarray(table.quantity("area", "m^2")),
             turns=jnp.asarray(table.quantity("turns", "1")),
             amplification=jnp.asarray(table.quantity("amplification", "1", default=1.0)),
@@ -372,7 +417,7 @@ def _film_scene(spec, fidelity):
     )
 
 
-# The moments level's defaults: Ni-Fe (the thesis's secondary models, PHYSICS.md 1.3) and
+# The moments level's defaults: Ni-Fe (the secondary models of Sajat's 2008 thesis) and
 # the rod's cells along its length (the error/cost rows of `magdesign accuracy`).
 NIFE_PERMEABILITY = 1000.0
 POLE_CELLS = 16
@@ -391,8 +436,10 @@ def _pole_scene(spec, fidelity):
     diameter = pole.quantity("diameter", "m")
     length = pole.quantity("length", "m", default=2.0 * ball_radius)  # the rod through the whole ball
     if length > 2.0 * ball_radius:
-        raise SpecError(f"pole.length: a {length * 1e3:g} mm rod does not fit in a ball of radius "
-                        f"{ball_radius * 1e3:g} mm; expected at most its diameter")
+        raise SpecError(
+            f"pole.length: a {length * 1e3:g} mm rod does not fit in a ball of radius "
+            f"{ball_radius * 1e3:g} mm; expected at most its diameter"
+        )
     level = pole.choice("fidelity", ("reduced", "moments"), default="reduced")
     demag = permeability = rod_cells = saturation = None
     if level == "reduced":
@@ -413,7 +460,7 @@ def _pole_scene(spec, fidelity):
     geometry.done()
     sensor = Table(spec, "sensor")
     sensor.choice("model", ("gmr",))
-    sensor.choice("preset", ("PANASONIC",))
+    valve = _PRESETS[sensor.choice("preset", ("PANASONIC",))]()
     offset = sensor.quantity("offset", "m")
     sensor_height = sensor.quantity("height", "m")
     sensor.done()
@@ -433,8 +480,10 @@ def _pole_scene(spec, fidelity):
         spring=jnp.asarray(spring),
         sensor_offset=jnp.asarray(offset),
         sensor_height=jnp.asarray(sensor_height),
-        transducer=SpinValveReadout(panasonic_meander(), jnp.asarray(1.0), True),
-        effects=_effects(spec, "V", saturation=ADC_FULL_SCALE, lsb=ADC_FULL_SCALE / 2 ** (ADC_BITS - 1), noise=ADC_NOISE),
+        transducer=SpinValveReadout(valve, jnp.asarray(1.0), True),
+        effects=_effects(
+            spec, "V", saturation=ADC_FULL_SCALE, lsb=ADC_FULL_SCALE / 2 ** (ADC_BITS - 1), noise=ADC_NOISE
+        ),
     )
 
 
@@ -451,12 +500,19 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
     points = loads_from_spec(spec).normal.shape[0]  # a bad [load] table is a bad spec, whatever runs next
     shape = Table(spec, "magnet").choice("shape", tuple(_SCENES))
     if "soft" in spec and shape != "cylinder":
-        raise SpecError(f"soft: [[soft]] parts are magnetised by cylinder magnets (magnet.shape = 'cylinder'), not a {shape}")
+        raise SpecError(
+            f"soft: [[soft]] parts are magnetised by cylinder magnets (magnet.shape = 'cylinder'), not a {shape}"
+        )
     scene = _SCENES[shape](spec, fidelity)
     # a time derivative (the inductors' EMF) or a lag needs a time series
-    needs_series = [name for name, wanted in (("the inductors' EMF", getattr(scene, "inductors", None) is not None),
-                                              ("the viscoelastic_lag effect", any(e.name == "viscoelastic_lag" for e in scene.effects)))
-                    if wanted]
+    needs_series = [
+        name
+        for name, wanted in (
+            ("the inductors' EMF", getattr(scene, "inductors", None) is not None),
+            ("the viscoelastic_lag effect", any(e.name == "viscoelastic_lag" for e in scene.effects)),
+        )
+        if wanted
+    ]
     if needs_series and points < 2:
         raise SpecError(f"load.points: {needs_series[0]} needs a time series of at least 2 load points, got {points}")
     # strongly typed leaves, as with_parameters makes them: a jitted function of the scene

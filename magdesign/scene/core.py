@@ -9,6 +9,7 @@ with the scene's effects (:mod:`magdesign.scene.effects`) hooked in at their sta
 """
 
 import abc
+import warnings
 from collections.abc import Callable, Mapping
 from typing import ClassVar, NamedTuple
 
@@ -18,7 +19,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float, PRNGKeyArray
 
-from magdesign.scene.effects import AbstractEffect
+from magdesign._numerics import CLIP_RTOL
+from magdesign.scene.effects import AbstractEffect, judged_saturation
 from magdesign.scene.loads import Loads
 from magdesign.transducers import to_chip
 from magdesign.units import SpecError
@@ -75,13 +77,22 @@ class AbstractScene(eqx.Module):
         """Named scalar outputs (SI) for design targets, read from a simulation of the
         scene (:func:`outputs`); see each scene."""
 
+    def chip_range(self) -> AbstractEffect | None:
+        """The range the readings are judged against (:func:`magdesign.scene.effects.judged_saturation`):
+        the listed saturation effect, else the chip's own range where the scene knows it; None
+        where it knows none."""
+        return judged_saturation(self.effects)
+
     def probe_points(self) -> Float[Array, "e 3"] | None:
         """Points (E, 3) (m) besides the sensors whose field :meth:`extras` needs (e.g.
         inductors), evaluated in the same batched field call as the sensors'; or None."""
         return None
 
     def extras(
-        self, displacement: Float[Array, "n 3"], loads: Loads, probe_field: Float[Array, "n e 3"] | None,
+        self,
+        displacement: Float[Array, "n 3"],
+        loads: Loads,
+        probe_field: Float[Array, "n e 3"] | None,
         key: PRNGKeyArray | None = None,
     ) -> dict[str, Array]:
         """Further read-outs of a simulation (e.g. inductor EMF, slip flags), given the
@@ -228,8 +239,15 @@ def simulate(
     extras_key = None if key is None or "noise" in without else jax.random.fold_in(key, 1)
     extras = scene.extras(passed.displacement, loads, passed.probe_field, extras_key)
     return SimulationResult(
-        loads, converged, passed.displacement, passed.field, passed.chip_field, passed.readings, extras,
-        scene.reading_labels, scene.reading_unit,
+        loads,
+        converged,
+        passed.displacement,
+        passed.field,
+        passed.chip_field,
+        passed.readings,
+        extras,
+        scene.reading_labels,
+        scene.reading_unit,
     )
 
 
@@ -246,15 +264,53 @@ def _si_to_display(unit):
     return {"T": ("mT", 1e3), "V": ("mV", 1e3), "m": ("mm", 1e3), "N": ("N", 1.0)}.get(unit, (unit, 1.0))
 
 
+# The saturation_ratio above which the chip is said to clip (_numerics.CLIP_RTOL).
+CLIPS_ABOVE = 1.0 + CLIP_RTOL
+
+
+class ClippingWarning(UserWarning):
+    """A simulation whose chip clips: a reading beyond the chip's range
+    (:meth:`AbstractScene.chip_range`)."""
+
+
+def saturation_ratio(scene: AbstractScene, result: SimulationResult) -> float | None:
+    """The largest |reading| / range of a simulation of ``scene`` (-), over every load
+    point, sensor and channel, from the readings before the reading effects (the
+    transducer's reading of ``result.chip_field``), the range :meth:`AbstractScene.chip_range`'s;
+    None where the scene knows no range. Above 1 the chip clips."""
+    judged = scene.chip_range()
+    return None if judged is None else float(judged.ratio(scene.transduce(result.chip_field)))
+
+
+def warn_if_clipping(scene: AbstractScene, result: SimulationResult) -> None:
+    """A :class:`ClippingWarning` (one line) where a simulation's chip clips
+    (:func:`saturation_ratio` above :data:`CLIPS_ABOVE`)."""
+    ratio = saturation_ratio(scene, result)
+    if ratio is not None and ratio > CLIPS_ABOVE:
+        listed = any(effect.name == "saturation" for effect in scene.effects)
+        shown = (
+            "the readings beyond it stop at the limit"
+            if listed
+            else "the scene does not list the saturation effect, so its readings here go beyond it"
+        )
+        warnings.warn(
+            f"the chip clips: its largest reading is {ratio:.3g} times its range (saturation_ratio); {shown}",
+            ClippingWarning,
+            stacklevel=2,
+        )
+
+
 def simulation_table(result: SimulationResult) -> str:
-    """A readable table: one row per load point, forces (N), displacement (mm), readings;
-    then a warning naming the load points where the mechanics did not converge."""
+    """A readable table: one row per load point, forces (N), displacement (mm), the chips'
+    readings (after the transducer and the reading effects: "s0.Bz reading" is sensor 0's
+    reading of its c axis, clipped and rounded where the scene lists those effects); then
+    a warning naming the load points where the mechanics did not converge."""
     unit, factor = _si_to_display(result.unit)
     readings = np.asarray(result.readings) * factor
     n, sensors, channels = readings.shape
     header = ["t (s)", "Fz (N)", "Fx (N)", "Fy (N)", "ux (mm)", "uy (mm)", "uz (mm)"]
     names = [f"s{s}.{label}" for s in range(sensors) for label in result.labels]
-    header += [f"{name} ({unit})" for name in names]
+    header += [f"{name} reading ({unit})" for name in names]
     rows = []
     loads = result.loads
     u = np.asarray(result.displacement) * 1e3
@@ -269,7 +325,9 @@ def simulation_table(result: SimulationResult) -> str:
     failed = np.flatnonzero(~np.asarray(result.converged))
     if failed.size:
         rows_failed = ", ".join(str(i + 1) for i in failed)
-        lines.append(f"warning: the mechanics did not converge at load points {rows_failed}: those rows are not equilibria")
+        lines.append(
+            f"warning: the mechanics did not converge at load points {rows_failed}: those rows are not equilibria"
+        )
     return "\n".join(lines)
 
 
@@ -277,8 +335,15 @@ def simulation_json(result: SimulationResult) -> dict:
     """The result as plain JSON data (SI floats, nested lists)."""
     loads = result.loads
     return {
-        "units": {"time": "s", "normal": "N", "shear": "N", "contact": "m", "displacement": "m", "field": "T",
-                  "readings": result.unit},
+        "units": {
+            "time": "s",
+            "normal": "N",
+            "shear": "N",
+            "contact": "m",
+            "displacement": "m",
+            "field": "T",
+            "readings": result.unit,
+        },
         "labels": list(result.labels),
         "time": np.asarray(loads.time).tolist(),
         "normal": np.asarray(loads.normal).tolist(),

@@ -7,7 +7,7 @@ chain's order, and effects sharing a hook in the order of :data:`EFFECT_ORDER`:
 
     1. temperature_drift  source     Br -> Br (1 + coefficient * temperature_change)
     2. placement          sensors    sensor positions + offsets
-    3. chip_tilt          sensors    chip rotation Rx Ry Rz (seed 002 Eq. 3) composed
+    3. chip_tilt          sensors    chip rotation Rx Ry Rz (spin-valve paper, Eq. 3) composed
                                      with the chip's nominal orientation
     4. viscoelastic_lag   motion     first-order lag of the displacement time series
     5. area_averaging     sampling   field averaged over the active area, n x n
@@ -98,7 +98,7 @@ class ChipTilt(AbstractEffect):
 class ViscoelasticLag(AbstractEffect):
     """First-order lag of the displacement, time constant ``time_constant`` (s).
 
-    Seed 001 identifies G(z) = 0.01955 / (1 - 0.9804 z^-1) at 100 Hz: tau = 0.505 s.
+    The dome-Hall paper (Eq. 2) identifies G(z) = 0.01955 / (1 - 0.9804 z^-1) at 100 Hz: tau = 0.505 s.
     The loads' time stamps set the (uniform) step; the series starts at rest.
     """
 
@@ -148,6 +148,11 @@ class Saturation(AbstractEffect):
     def reading(self, reading, key):
         return saturate(reading, self.limit)
 
+    def ratio(self, ideal: Float[Array, "n s c"]) -> Float[Array, ""]:
+        """The largest |ideal reading| / limit over every load point, sensor and channel
+        (-), from the readings before the reading effects (n, S, C): above 1 the chip clips."""
+        return jnp.max(jnp.abs(ideal) / self.limit)
+
 
 class Noise(AbstractEffect):
     """Gaussian noise of standard deviation ``sigma`` (reading units; scalar or per
@@ -173,8 +178,22 @@ class Quantisation(AbstractEffect):
 
 
 # Outputs the reading effects give a design (:func:`effect_outputs`), with their SI units.
-EFFECT_OUTPUT_UNITS = {"saturation": {"saturation_ratio": "1"}, "quantisation": {"resolution": "N"},
-                       "noise": {"noise_equivalent_force": "N"}}
+EFFECT_OUTPUT_UNITS = {
+    "saturation": {"saturation_ratio": "1"},
+    "quantisation": {"resolution": "N"},
+    "noise": {"noise_equivalent_force": "N"},
+}
+
+
+def judged_saturation(effects, full_scale: Float[Array, "*c"] | None = None) -> "Saturation | None":
+    """The range a design's readings are judged against (its ``saturation_ratio``): the
+    listed saturation effect, else the chip's own range ``full_scale`` (reading units,
+    scalar or per channel (C,): a Hall preset's full scale), else None (no range known).
+    A design on a chip meets the chip's range whether or not its simulation clips."""
+    listed = next((effect for effect in effects if isinstance(effect, Saturation)), None)
+    if listed is not None or full_scale is None:
+        return listed
+    return Saturation(limit=jnp.asarray(full_scale))
 
 
 def effect_output_units(effects) -> dict[str, str]:
@@ -182,9 +201,7 @@ def effect_output_units(effects) -> dict[str, str]:
     return {name: unit for effect in effects for name, unit in EFFECT_OUTPUT_UNITS.get(effect.name, {}).items()}
 
 
-def effect_outputs(
-    effects, ideal: Float[Array, "n s c"], sensitivity: Float[Array, ""]
-) -> dict[str, Float[Array, ""]]:
+def effect_outputs(effects, ideal: Float[Array, "n s c"], sensitivity: Float[Array, ""]) -> dict[str, Float[Array, ""]]:
     """What the listed reading effects mean for a design, from the ideal readings (n, S, C)
     (before the reading effects) and the reading sensitivity (reading unit per N) of the
     channel a design reads (sensor 0's last channel: a Hall chip's c axis, a valve's V):
@@ -198,7 +215,7 @@ def effect_outputs(
     values = {}
     for effect in effects:
         if isinstance(effect, Saturation):
-            values["saturation_ratio"] = jnp.max(jnp.abs(ideal) / effect.limit)
+            values["saturation_ratio"] = effect.ratio(ideal)
         elif isinstance(effect, Quantisation):
             values["resolution"] = jnp.ravel(effect.lsb)[-1] / jnp.abs(sensitivity)
         elif isinstance(effect, Noise):
@@ -206,8 +223,17 @@ def effect_outputs(
     return values
 
 
-EFFECT_ORDER = (TemperatureDrift, Placement, ChipTilt, ViscoelasticLag, AreaAveraging, Background,
-                Saturation, Noise, Quantisation)
+EFFECT_ORDER = (
+    TemperatureDrift,
+    Placement,
+    ChipTilt,
+    ViscoelasticLag,
+    AreaAveraging,
+    Background,
+    Saturation,
+    Noise,
+    Quantisation,
+)
 EFFECT_NAMES = tuple(effect.name for effect in EFFECT_ORDER)
 
 

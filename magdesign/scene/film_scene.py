@@ -1,4 +1,4 @@
-"""Seed 004: a sinusoidally magnetised film on an elastomer layer over Hall taxels.
+"""The film-Hall sensor (Yan et al., Sci. Robot. 2021): a sinusoidally magnetised film on an elastomer layer over Hall taxels.
 
 Scene frame: z points up, from the taxels towards the film. The film (period T,
 thickness d, polarization amplitude J0; :mod:`magdesign.fields.film`) lies on an
@@ -27,6 +27,9 @@ of the middle four of an even grid), through the scene's chain with its field ef
     normal_sensitivity  d|B| / dFz there at rest (T/N); k |B| / k_n for the infinite film
     shear_phase_max     k times the largest |u_x| of the sweep (rad)
     normal_compliance   1 / k_n (m/N);  shear_compliance  1 / k_s (m/N)
+    saturation_ratio    the largest |reading| over every taxel, axis and load point over the
+                        chips' range (the saturation effect's limit, else the preset's full
+                        scale) (-); above 1 the chips clip
 """
 
 from typing import ClassVar
@@ -38,7 +41,7 @@ from jaxtyping import Array, Float
 
 from magdesign.fields import film
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, apply_source_effects, chain
-from magdesign.scene.effects import AbstractEffect
+from magdesign.scene.effects import AbstractEffect, judged_saturation
 from magdesign.scene.loads import Loads
 from magdesign.scene.mechanics import Layer
 from magdesign.scene.pose import grid_positions
@@ -46,7 +49,7 @@ from magdesign.transducers import Hall3D
 
 
 class FilmScene(AbstractScene):
-    """Seed 004 (see the module docstring); all lengths (m), J0 (T), area (m^2).
+    """The film-Hall sensor (see the module docstring); all lengths (m), J0 (T), area (m^2).
 
     ``periods`` (static): None for an infinite film, N for a strip N periods wide.
     """
@@ -64,13 +67,22 @@ class FilmScene(AbstractScene):
     SOURCE_KEY: ClassVar = "magnet.magnetization"
     reading_labels: ClassVar = ("Bx", "By", "Bz")
     reading_unit: ClassVar = "T"
-    output_units: ClassVar[dict[str, str]] = {
+    OUTPUT_UNITS: ClassVar[dict[str, str]] = {
         "field_fraction": "1",
         "normal_sensitivity": "T/N",
         "shear_phase_max": "rad",
         "normal_compliance": "m/N",
         "shear_compliance": "m/N",
     }
+
+    @property
+    def output_units(self):
+        return {**self.OUTPUT_UNITS, "saturation_ratio": "1"}
+
+    def chip_range(self):
+        """The listed saturation effect, else the Hall chips' own range (the preset's full
+        scale per axis)."""
+        return judged_saturation(self.effects, self.hall.full_scale)
 
     @property
     def parameter_paths(self):
@@ -128,4 +140,5 @@ class FilmScene(AbstractScene):
             "shear_phase_max": k * jnp.max(jnp.abs(result.displacement[:, 0])),
             "normal_compliance": 1.0 / stiffness.normal,
             "shear_compliance": 1.0 / stiffness.shear,
+            "saturation_ratio": self.chip_range().ratio(self.transduce(result.chip_field)),
         }

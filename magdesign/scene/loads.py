@@ -42,11 +42,8 @@ class Loads(eqx.Module):
 
 def _sweep(table, key, unit, count):
     """A quantity ramped linearly over ``count`` points from a [start, stop] pair."""
-    if not table.has(key):
-        table.quantities(key, unit, default=None)
-        return np.zeros(count)
-    start, stop = table.quantities(key, unit, length=2)
-    return np.linspace(start, stop, count)
+    pair = table.quantities(key, unit, length=2, default=None)
+    return np.zeros(count) if pair is None else np.linspace(*pair, count)
 
 
 def loads_from_spec(spec: dict) -> Loads:

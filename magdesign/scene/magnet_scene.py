@@ -1,4 +1,5 @@
-"""Seeds 001, 002, 003: an axially magnetised cylinder moved by a dome or a layer.
+"""The dome-Hall, spin-valve matrix and GMR-inductor sensors: an axially magnetised cylinder
+moved by a dome or a layer.
 
 Scene frame: the reference sensor plane is z = 0; at rest the magnet's near (bottom)
 face is ``gap`` above it, its axis along z through the origin, magnetised along +z
@@ -10,9 +11,9 @@ further magnets (``extra``, :class:`magdesign.scene.pose.Magnet`), carried with 
 fixed, add their fields. Soft-magnetic parts (``soft``, :class:`magdesign.scene.pose.SoftPart`,
 the method of moments) are magnetised by the magnets and by one another (one system of all
 their cells), and add their own fields.
-Sensors sit at given positions (a reference sensor at the origin for seed 001; a
-4 x 2 matrix for seed 002; four GMR at several depths for seed 003). A press moves
-the magnet by -z towards them (seed 002's chips move towards a fixed magnet: the
+Sensors sit at given positions (a reference sensor at the origin for the dome-Hall
+sensor; a 4 x 2 matrix for the spin-valve matrix; four GMR at several depths for the
+GMR-inductor sensor). A press moves the magnet by -z towards them (the spin-valve chips move towards a fixed magnet: the
 same relative displacement).
 
 Outputs (:meth:`MagnetScene.outputs`), read from a simulation of the load sweep (see
@@ -28,12 +29,20 @@ scene's field effects, before its reading effects.
     inplane_field_max  largest |B_a| (the chip's sensitive in-plane axis) over every
                        sensor and load point (T)
     inplane_field_min  the smallest (most negative) B_a over the same (T)
+    embed              how deep the magnet's near face lies below the top of the part that
+                       carries it at rest (the layer's top face, the dome's outer apex):
+                       top - gap (m); below 0 the magnet floats above its part
+    reach              how far the magnet's far face reaches above the lowest point of the
+                       part that holds it (a dome's inner apex, a layer's base): gap + height
+                       - bottom (m); below 0 the magnet hangs in the dome's cavity
     outer_radius       the dome's outer radius (m), for dome scenes only
     travel_fraction    the largest travel towards the sensors over the room the part allows
                        (a dome's inner height R_o - t, a layer's thickness) (-)
     mechanics_converged  1 if the mechanics converged at every load point, else 0 (-)
 and, when the scene lists the effect (:func:`magdesign.scene.effects.effect_outputs`):
     saturation_ratio   largest |reading| / saturation limit, per channel (-); above 1 clips
+                       (also without the effect for a Hall chip, against its preset's range:
+                       :meth:`MagnetScene.chip_range`)
     resolution         one LSB of sensor 0's last channel over its reading sensitivity (N)
     noise_equivalent_force  one sigma of that channel over the same (N)
 """
@@ -45,10 +54,11 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from magdesign.scene.core import MECHANICS_CONVERGED, AbstractScene
-from magdesign.scene.effects import AbstractEffect, effect_output_units, effect_outputs
+from magdesign.scene.effects import AbstractEffect, effect_output_units, effect_outputs, judged_saturation
 from magdesign.scene.mechanics import AbstractMechanics
 from magdesign.scene.pose import Magnet, SoftPart, posed_cylinder, rotation, soft_parts_field
-from magdesign.transducers import add_noise, emf, slip_flags, Hall3D, SpinValve
+from magdesign.transducers import Hall3D, SpinValve, add_noise, emf, slip_flags
+
 
 class SpinValveReadout(eqx.Module):
     """A spin valve's output voltage, optionally amplified as a bridge difference.
@@ -69,7 +79,7 @@ class SpinValveReadout(eqx.Module):
 
 
 class Inductors(eqx.Module):
-    """Seed 003's chip inductors: EMF = -N d(Bz A)/dt, amplified, and the slip flags.
+    """The GMR-inductor sensor's chip inductors: EMF = -N d(Bz A)/dt, amplified, and the slip flags.
 
     ``positions`` (I, 3) (m), ``area`` the coil's mean turn area (m^2), ``turns`` N,
     ``amplification`` (-), ``noise`` the output's Gaussian noise (V rms, drawn when a
@@ -116,12 +126,21 @@ class MagnetScene(AbstractScene):
         "field_max": "T",
         "inplane_field_max": "T",
         "inplane_field_min": "T",
+        "embed": "m",
+        "reach": "m",
         MECHANICS_CONVERGED: "1",
     }
 
     @property
     def output_units(self):
-        return {**self.OUTPUT_UNITS, **self.mechanics.output_units, **effect_output_units(self.effects)}
+        judged = {} if self.chip_range() is None else {"saturation_ratio": "1"}
+        return {**self.OUTPUT_UNITS, **self.mechanics.output_units, **effect_output_units(self.effects), **judged}
+
+    def chip_range(self):
+        """The listed saturation effect, else a Hall chip's own range (its preset's full
+        scale per axis); a spin valve's range is its read-out's, known only from the effect."""
+        full_scale = self.transducer.full_scale if isinstance(self.transducer, Hall3D) else None
+        return judged_saturation(self.effects, full_scale)
 
     @property
     def parameter_paths(self):
@@ -165,7 +184,9 @@ class MagnetScene(AbstractScene):
     def source_field(self, points, displacement):
         field = self.magnets_field(points, displacement)
         if self.soft:
-            field = field + soft_parts_field(self.soft, points, displacement, lambda x: self.magnets_field(x, displacement))
+            field = field + soft_parts_field(
+                self.soft, points, displacement, lambda x: self.magnets_field(x, displacement)
+            )
         return field
 
     def magnets_field(self, points, displacement):
@@ -196,6 +217,7 @@ class MagnetScene(AbstractScene):
         uz = result.displacement[:, 2]
         field_rest, field_closest = field[0, 0, 2], field[closest, 0, 2]
         ideal = self.transduce(field)
+        judged = self.chip_range()
         return {
             "compliance": (uz[0] - uz[closest]) / force,
             "closest_gap": self.gap + jnp.min(uz),
@@ -205,9 +227,12 @@ class MagnetScene(AbstractScene):
             "field_max": jnp.max(jnp.abs(field)),
             "inplane_field_max": jnp.max(jnp.abs(field[..., 0])),
             "inplane_field_min": jnp.min(field[..., 0]),
+            "embed": self.mechanics.top() - self.gap,
+            "reach": self.gap + self.height - self.mechanics.bottom(),
             MECHANICS_CONVERGED: jnp.all(result.converged).astype(float),
             **self.mechanics.outputs(result.displacement),
             **effect_outputs(self.effects, ideal, (ideal[closest, 0, -1] - ideal[0, 0, -1]) / force),
+            **({} if judged is None else {"saturation_ratio": judged.ratio(ideal)}),
         }
 
     def probe_points(self):

@@ -49,6 +49,16 @@ class AbstractMechanics(eqx.Module):
         it converged."""
 
     @abc.abstractmethod
+    def top(self) -> Float[Array, ""]:
+        """The height (m) of the part's top above the sensor plane (z = 0, where its base
+        rests) at rest: where a magnet it carries sits at or below."""
+
+    @abc.abstractmethod
+    def bottom(self) -> Float[Array, ""]:
+        """The height (m) above the sensor plane of the lowest point of the part that holds a
+        magnet it carries, at rest: where the magnet's far face reaches at or above."""
+
+    @abc.abstractmethod
     def travel_room(self) -> Float[Array, ""]:
         """How far (m) the source can move towards the sensors before the part bottoms out."""
 
@@ -60,7 +70,7 @@ class AbstractMechanics(eqx.Module):
 
 
 class Dome(AbstractMechanics):
-    """Seed 001's hemispherical dome pressed at its apex by a flat plate (PHYSICS.md 2.3).
+    """The dome-Hall sensor's hemispherical dome pressed at its apex by a flat plate.
 
     The apex moves by -C(F) F along z, C the secant compliance of
     :func:`magdesign.mechanics.dome_compliance` at that force (every force of a sweep
@@ -74,7 +84,10 @@ class Dome(AbstractMechanics):
     fidelity: str = eqx.field(static=True)
     base: str = eqx.field(static=True)
 
-    PARAMETERS: ClassVar = {"mechanics.outer_radius": lambda m: m.outer_radius, "mechanics.thickness": lambda m: m.thickness}
+    PARAMETERS: ClassVar = {
+        "mechanics.outer_radius": lambda m: m.outer_radius,
+        "mechanics.thickness": lambda m: m.thickness,
+    }
 
     def compliance(self, force):
         compliance, result = mechanics.dome_compliance(
@@ -89,6 +102,14 @@ class Dome(AbstractMechanics):
         return compliance, result == mechanics.DomeResult.successful
 
     output_units: ClassVar = {**AbstractMechanics.output_units, "outer_radius": "m", "wall_fraction": "1"}
+
+    def top(self):
+        """The dome's outer apex, R_o above its base plane."""
+        return self.outer_radius
+
+    def bottom(self):
+        """The dome's inner apex, R_o - t above its base plane: below it lies the cavity."""
+        return self.outer_radius - self.thickness
 
     def travel_room(self):
         """The dome's inner height R_o - t: the apex meets the base plane there."""
@@ -121,14 +142,27 @@ class Layer(AbstractMechanics):
     material: AbstractMaterial
     fidelity: str = eqx.field(static=True)
 
-    PARAMETERS: ClassVar = {"mechanics.thickness": lambda m: m.thickness, "mechanics.contact_area": lambda m: m.contact_area}
+    PARAMETERS: ClassVar = {
+        "mechanics.thickness": lambda m: m.thickness,
+        "mechanics.contact_area": lambda m: m.contact_area,
+    }
 
     @property
     def stiffness(self):
-        return mechanics.layer_stiffness(thickness=self.thickness, area=self.contact_area, material=self.material, fidelity=self.fidelity)
+        return mechanics.layer_stiffness(
+            thickness=self.thickness, area=self.contact_area, material=self.material, fidelity=self.fidelity
+        )
 
     def compliance(self, force):
         return 1.0 / self.stiffness.normal, jnp.asarray(True)
+
+    def top(self):
+        """The layer's top face, its thickness above the sensor plane it lies on."""
+        return self.thickness
+
+    def bottom(self):
+        """The sensor plane the layer lies on: the layer is solid down to it."""
+        return jnp.zeros_like(self.thickness)
 
     def travel_room(self):
         """The layer's thickness: pressed to nothing at that travel."""

@@ -20,8 +20,8 @@ from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import rotation
 
 GRID_POINTS = 181
-# A soft body's field costs one exact cuboid kernel per cell at every grid point (seed
-# 000's rod: 336 cells, ~2.5 ms per point): its pictures use a coarser grid.
+# A soft body's field costs one exact cuboid kernel per cell at every grid point (the
+# magnetic-suspension rod: 336 cells, ~2.5 ms per point): its pictures use a coarser grid.
 SOFT_GRID_POINTS = 61
 MM = 1e3  # the picture is drawn in millimetres
 
@@ -36,7 +36,9 @@ def _largest_load(loads):
 
 def _cylinder_corners(centre, angles, radius, height):
     """Corners (4, 2) (x, z) of a cylinder's section by its own y = 0 plane, in the scene."""
-    local = np.array([[-radius, 0, -height / 2], [radius, 0, -height / 2], [radius, 0, height / 2], [-radius, 0, height / 2]])
+    local = np.array(
+        [[-radius, 0, -height / 2], [radius, 0, -height / 2], [radius, 0, height / 2], [-radius, 0, height / 2]]
+    )
     matrix = np.eye(3) if angles is None else np.asarray(rotation(angles))
     points = local @ matrix + np.asarray(centre)  # M^T p for each row
     return points[:, [0, 2]]
@@ -75,7 +77,9 @@ def _draw_bodies(axis, scene, displacement):
     """Outlines of the magnet(s), mechanics and chips (mm)."""
     u = np.asarray(displacement)
     if isinstance(scene, MagnetScene):
-        corners = _cylinder_corners(np.asarray(scene.magnet_centre()) + u, scene.angles, float(scene.radius), float(scene.height))
+        corners = _cylinder_corners(
+            np.asarray(scene.magnet_centre()) + u, scene.angles, float(scene.radius), float(scene.height)
+        )
         axis.add_patch(Polygon(corners * MM, closed=True, facecolor="0.85", edgecolor="k", label="magnet"))
         for extra in scene.extra:
             centre = np.asarray(extra.centre) + (u if extra.moves else 0.0)
@@ -84,21 +88,41 @@ def _draw_bodies(axis, scene, displacement):
         mechanics = scene.mechanics
         if isinstance(mechanics, Dome):
             for radius in (float(mechanics.outer_radius), float(mechanics.outer_radius - mechanics.thickness)):
-                axis.add_patch(Arc((0.0, 0.0), 2 * radius * MM, 2 * radius * MM, theta1=0, theta2=180, linestyle="--", color="k"))
+                axis.add_patch(
+                    Arc((0.0, 0.0), 2 * radius * MM, 2 * radius * MM, theta1=0, theta2=180, linestyle="--", color="k")
+                )
             axis.plot([], [], "k--", label="dome (undeformed)")
         else:
-            thickness = float(mechanics.thickness)
-            axis.add_patch(Rectangle((-1e3, 0.0), 2e3, thickness * MM, facecolor="none", edgecolor="k", linestyle="--", label="layer"))
+            # the layer's top face moves with the magnet it carries (pressed by -uz)
+            thickness = float(mechanics.thickness + u[2])
+            axis.add_patch(
+                Rectangle(
+                    (-1e3, 0.0), 2e3, thickness * MM, facecolor="none", edgecolor="k", linestyle="--", label="layer"
+                )
+            )
         chips = np.asarray(scene.sensor_positions)
     elif isinstance(scene, FilmScene):
         h, d = float(scene.layer.thickness + u[2]), float(scene.film_thickness)
         half = 1e3 if scene.periods is None else scene.periods * float(scene.period) / 2
-        axis.add_patch(Rectangle(((u[0] - half) * MM, h * MM), 2 * half * MM, d * MM, facecolor="0.7", edgecolor="k", label="film"))
-        axis.add_patch(Rectangle((-1e3, 0.0), 2e3, h * MM, facecolor="none", edgecolor="k", linestyle="--", label="layer"))
+        axis.add_patch(
+            Rectangle(((u[0] - half) * MM, h * MM), 2 * half * MM, d * MM, facecolor="0.7", edgecolor="k", label="film")
+        )
+        axis.add_patch(
+            Rectangle((-1e3, 0.0), 2e3, h * MM, facecolor="none", edgecolor="k", linestyle="--", label="layer")
+        )
         chips = np.asarray(scene.sensor_poses()[0])
     else:
         radius, thickness = float(scene.plate_radius), float(scene.plate_thickness)
-        axis.add_patch(Rectangle((-radius * MM, -thickness * MM), 2 * radius * MM, thickness * MM, facecolor="0.85", edgecolor="k", label="magnet plate"))
+        axis.add_patch(
+            Rectangle(
+                (-radius * MM, -thickness * MM),
+                2 * radius * MM,
+                thickness * MM,
+                facecolor="0.85",
+                edgecolor="k",
+                label="magnet plate",
+            )
+        )
         centre = np.asarray(scene.centre)
         axis.add_patch(Circle((centre[0] * MM, centre[2] * MM), float(scene.ball_radius) * MM, **OUTLINE))
         tip = np.asarray(scene.tip(0.0)) + u
@@ -112,7 +136,9 @@ def _plane_field(scene, displacement, x, z):
     """|B| and (Bx, Bz) (T) on the (x, z) grid in y = 0; NaN above a film (no field model)."""
     xx, zz = np.meshgrid(x, z)
     points = jnp.asarray(np.stack([xx, 0 * xx, zz], axis=-1))
-    field = np.asarray(eqx.filter_jit(lambda scene, points, u: scene.source_field(points, u))(scene, points, jnp.asarray(displacement)))
+    field = np.asarray(
+        eqx.filter_jit(lambda scene, points, u: scene.source_field(points, u))(scene, points, jnp.asarray(displacement))
+    )
     if isinstance(scene, FilmScene):
         below = zz < float(scene.layer.thickness + displacement[2])
         field = np.where(below[..., None], field, np.nan)
@@ -150,7 +176,9 @@ def plot_scene(scene, loads, path, *, title=""):
     axes = figure.subplots(1, 2, sharey=True)
     for axis, (label, u), (magnitude, bx, bz) in zip(axes, panels, fields):
         mesh = axis.pcolormesh(x * MM, z * MM, magnitude, norm=norm, cmap="viridis", shading="auto")
-        axis.streamplot(x * MM, z * MM, np.nan_to_num(bx), np.nan_to_num(bz), color="w", linewidth=0.6, density=1.3, arrowsize=0.6)
+        axis.streamplot(
+            x * MM, z * MM, np.nan_to_num(bx), np.nan_to_num(bz), color="w", linewidth=0.6, density=1.3, arrowsize=0.6
+        )
         _draw_bodies(axis, scene, u)
         axis.set_xlim(x_min * MM, x_max * MM)
         axis.set_ylim(z_min * MM, z_max * MM)

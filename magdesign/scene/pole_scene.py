@@ -1,4 +1,6 @@
-"""Seed 000, reduced model: a soft-magnetic pole in a ball over a magnet plate.
+"""The magnetic-suspension sensor (T. R. binti Sajat, "Basic study on tactile sensor by using
+magnetic suspension", master's thesis, Wakayama University, 2008): a soft-magnetic pole in
+a ball over a magnet plate.
 
 A plastic ball of radius r_b carries a Ni-Fe rod (diameter d_p) along a diameter, from the
 ball's bottom up for its length (``pole.length``, default the whole diameter 2 r_b); its
@@ -6,7 +8,7 @@ bottom sits ``gap`` above a permanent-magnet plate (a disc of radius R, thicknes
 remanence Br = mu0 Hc, top face at z = 0). Tilting the ball by theta about y moves
 the rod's lower tip to c + r_b (sin theta, 0, -cos theta), c the ball's centre.
 
-Reduced (magnetic-charge) model, the cheap fidelity level of PHYSICS.md 1.3: the rod
+Reduced (magnetic-charge) model, the cheap fidelity level: the rod
 is magnetised along its axis by the plate's field at its lower tip, mu0 M = B_axial /
 N_d (a high-permeability rod with demagnetising factor N_d), which puts the magnetic
 charges -/+ Q = mu0 M A_p (T m^2) on its lower / upper end. A charge Q at p adds
@@ -17,19 +19,19 @@ A shear (tangential) force F_x at the ball tilts it by theta = F_x / k_spring, w
 k_spring the published spring coefficient (N/rad; 12.57 uN at 10 deg). A GMR element
 (sensitive along x) sits ``sensor_height`` above the plate at x = ``sensor_offset``.
 
-Against seed 000 (checked, no unit or factor error found: charges in T m^2, field of a
+Against the thesis (checked, no unit or factor error found: charges in T m^2, field of a
 charge Q r / (4 pi r^3), force Q B / mu0, generalised force per ball radius in N/rad):
 with the example's geometry the model gives a spring coefficient of 7.0e-3 N/rad against
 the thesis's 7.2e-5 N/rad (12.57 uN at 10 deg, its first design), and a GMR (in-plane)
 sensitivity of 4.5 mT/deg; the thesis's 0.3 mT/deg (magnet soleplate) is a different
-quantity, the difference of two Hall sensors' B_z, which studies/seed000_suspension.py
+quantity, the difference of two Hall sensors' B_z, which studies/magnetic_suspension.py
 computes like for like. Both scale with the rod's induced magnetisation
 (tip field / N_d), which is where the reduced model is weakest: N_d = 0.1 is a guess for
 the rod's aspect ratio, the plate's field falls along the 4 mm rod while the model takes
 it at the tip, and the thesis's FEM has a non-linear B-H curve (its Table 3.1 also lost
 its units). Treat absolute forces of this level as upper bounds; use it for trends.
 
-Method-of-moments level (``pole.fidelity = "moments"``, PHYSICS.md 1.3, issue 15): the
+Method-of-moments level (``pole.fidelity = "moments"``): the
 rod is a soft body of relative permeability mu_r (``pole.permeability``; linear, or
 saturating at ``pole.saturation`` (T) by :mod:`magdesign.fields.soft`'s law) split
 into cuboid cells (:mod:`magdesign.fields.soft`, ``pole.cells`` along its length), its
@@ -47,6 +49,8 @@ Outputs (:meth:`PoleScene.outputs`), at theta = 0:
                         rod (its charges; at the moments level dW'/dtheta), per ball
                         radius (N/rad); > 0 is restoring
     attraction          the plate's vertical pull on the rod (N, > 0 downwards)
+and, where the scene lists the saturation effect, over the load sweep:
+    saturation_ratio    the largest |reading| over its limit (-); above 1 the read-out clips
 At the moments level the two tilt derivatives are five-point central differences of
 exact values over TILT_DIFFERENCE_STEP (their error O(step^4), below 1e-6 relative, far
 below the cells' discretisation error), and the attraction is -dW'/dz.
@@ -74,7 +78,7 @@ def _charge_field(points, position, charge):
 
 
 class PoleScene(AbstractScene):
-    """Seed 000's suspension (see the module docstring); SI throughout.
+    """The magnetic-suspension sensor (see the module docstring); SI throughout.
 
     ``fidelity`` (static) is "reduced" (charges, ``demagnetizing_factor``) or "moments"
     (the rod a soft body of ``permeability``, ``rod_cells`` = its grid (n_x, n_y, n_z),
@@ -102,7 +106,15 @@ class PoleScene(AbstractScene):
     SOURCE_KEY = "magnet.remanence"
     reading_labels = ("V",)
     reading_unit = "V"
-    output_units: ClassVar[dict[str, str]] = {"field_sensitivity": "T/rad", "spring_coefficient": "N/rad", "attraction": "N"}
+    OUTPUT_UNITS: ClassVar[dict[str, str]] = {
+        "field_sensitivity": "T/rad",
+        "spring_coefficient": "N/rad",
+        "attraction": "N",
+    }
+
+    @property
+    def output_units(self):
+        return {**self.OUTPUT_UNITS, **({} if self.chip_range() is None else {"saturation_ratio": "1"})}
 
     @property
     def parameter_paths(self):
@@ -114,8 +126,11 @@ class PoleScene(AbstractScene):
             "pole.ball_radius": lambda s: s.ball_radius,
             "pole.diameter": lambda s: s.pole_diameter,
             "pole.length": lambda s: s.pole_length,
-            **({"pole.demagnetizing_factor": lambda s: s.demagnetizing_factor} if self.fidelity == "reduced"
-               else {"pole.permeability": lambda s: s.permeability}),
+            **(
+                {"pole.demagnetizing_factor": lambda s: s.demagnetizing_factor}
+                if self.fidelity == "reduced"
+                else {"pole.permeability": lambda s: s.permeability}
+            ),
             **({"pole.saturation": lambda s: s.saturation} if self.saturation is not None else {}),
             "mechanics.spring": lambda s: s.spring,
             "sensor.offset": lambda s: s.sensor_offset,
@@ -148,9 +163,15 @@ class PoleScene(AbstractScene):
             raise ValueError("the rod is a soft body at the moments level only (pole.fidelity = 'moments')")
         angles = jnp.stack([0.0 * theta, theta, 0.0 * theta])
         centre = self.tip(theta) + shift + 0.5 * self.pole_length * rotation(angles)[2]
-        return SoftPart(size=(self.pole_diameter, self.pole_length), permeability=self.permeability,
-                        centre=tuple(centre), angles=angles, shape="cylinder", grid=self.rod_cells,
-                        saturation=self.saturation)
+        return SoftPart(
+            size=(self.pole_diameter, self.pole_length),
+            permeability=self.permeability,
+            centre=tuple(centre),
+            angles=angles,
+            shape="cylinder",
+            grid=self.rod_cells,
+            saturation=self.saturation,
+        )
 
     def _rod_pose(self, theta, shift):
         """The rod's centre (3,) (m) and turn (3, 3) (v_scene = turn v_body) at tilt
@@ -245,12 +266,20 @@ class PoleScene(AbstractScene):
                 "field_sensitivity": first @ field,
                 "spring_coefficient": -(second @ energy) / self.ball_radius,
                 "attraction": self.attraction(),
+                **self._range_outputs(result),
             }
         return {
             "field_sensitivity": jax.grad(field_a)(0.0),
             "spring_coefficient": -jax.grad(self.tangential_force)(0.0),
             "attraction": self.attraction(),
+            **self._range_outputs(result),
         }
+
+    def _range_outputs(self, result):
+        """{"saturation_ratio": the largest |reading| over the sweep / the saturation
+        effect's limit} where the scene lists the effect (the GMR's read-out range), else {}."""
+        judged = self.chip_range()
+        return {} if judged is None else {"saturation_ratio": judged.ratio(self.transduce(result.chip_field))}
 
     def attraction(self):
         """The plate's vertical pull on the rod at rest (N, > 0 downwards)."""

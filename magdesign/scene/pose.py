@@ -1,4 +1,5 @@
-"""Poses: the rotation of sensor chips (seed 002, Eqs. 3-4) and of magnets, and the sensor grid.
+"""Poses: the rotation of sensor chips (the spin-valve paper, Eqs. 3-4) and of
+magnets, and the sensor grid.
 
 An orientation is three angles (alpha, beta, gamma) (rad); a vector v given in the scene
 (world) frame reads, in the body's own frame,
@@ -65,8 +66,13 @@ class Magnet(eqx.Module):
         """Flux density (T, scene frame) at ``points`` with the load's ``displacement`` (m)."""
         centre = self.centre + displacement if self.moves else self.centre
         return posed_cylinder(
-            points, centre=centre, angles=self.angles, radius=self.radius, height=self.height,
-            polarization=self.polarization, fidelity=fidelity,
+            points,
+            centre=centre,
+            angles=self.angles,
+            radius=self.radius,
+            height=self.height,
+            polarization=self.polarization,
+            fidelity=fidelity,
         )
 
 
@@ -90,8 +96,13 @@ class SoftPart(eqx.Module):
 
     @property
     def body(self) -> soft.SoftBody:
-        return soft.soft_body(self.shape, jnp.stack(self.size), cells=self.grid, permeability=self.permeability,
-                              saturation=self.saturation)
+        return soft.soft_body(
+            self.shape,
+            jnp.stack(self.size),
+            cells=self.grid,
+            permeability=self.permeability,
+            saturation=self.saturation,
+        )
 
     def position(self, displacement):
         """The part's centre (3,) (m, scene frame) with the load's ``displacement`` (m)."""

@@ -1,8 +1,9 @@
-"""Spin-valve / GMR sensors with one sensitive in-plane axis (seed 002; seed 000).
+"""Spin-valve / GMR sensors with one sensitive in-plane axis (the spin-valve matrix and the
+magnetic-suspension sensor; docs/references.md).
 
 The field is given as a flux density B = mu0 H (T) in the magnet (world) frame. The
-chip sees it in its own frame (a, b, c), a along the sensitive direction (seed 002,
-Eqs. 3-4):
+chip sees it in its own frame (a, b, c), a along the sensitive direction (the
+spin-valve paper, Eqs. 3-4):
 
     H_sensor = Rx(alpha) Ry(beta) Rz(gamma) H
 
@@ -27,7 +28,7 @@ from magdesign.units import MU0, mT
 def rotation_matrix(
     alpha: Float[ArrayLike, "..."], beta: Float[ArrayLike, "..."], gamma: Float[ArrayLike, "..."]
 ) -> Float[Array, "... 3 3"]:
-    """Rx(alpha) Ry(beta) Rz(gamma) (seed 002, Eq. 4), angles in rad, broadcast together."""
+    """Rx(alpha) Ry(beta) Rz(gamma) (the spin-valve paper's Eq. 4), angles in rad, broadcast together."""
     alpha, beta, gamma = jnp.broadcast_arrays(*(jnp.asarray(a, dtype=float) for a in (alpha, beta, gamma)))
     one, zero = jnp.ones_like(alpha), jnp.zeros_like(alpha)
 
@@ -139,7 +140,7 @@ class SpinValve(eqx.Module):
     def equivalent_field(
         self, resistance: Float[ArrayLike, "..."], reference: Float[ArrayLike, "..."] | None = None
     ) -> Float[Array, "..."]:
-        """Equivalent field change (T) of seed 002, Eqs. 1-2: dR% / sensitivity.
+        """Equivalent field change (T) of the spin-valve paper, Eqs. 1-2: dR% / sensitivity.
 
         dR = (resistance - reference) / reference, ``reference`` defaulting to R0; a
         ratio of voltages under the same bias current may be passed instead of a
@@ -150,7 +151,7 @@ class SpinValve(eqx.Module):
 
 
 def inesc_spin_valve() -> SpinValve:
-    """Seed 002's chip: six 2 x 35 um^2 spin valves in series (INESC-MN).
+    """The spin-valve paper's chip (Section 4.1): six 2 x 35 um^2 spin valves in series (INESC-MN).
 
     R0 = 2 kOhm, 0.72 %/mT, 1 mA bias (2.000 V at zero field, 2.0144 / 1.9856 V at
     +-1 mT; the paper rounds to 2.015 / 1.985 V), linear within +-2.5 mT. The
@@ -168,10 +169,10 @@ def inesc_spin_valve() -> SpinValve:
 
 
 def panasonic_meander(resistance: float = 1e3) -> SpinValve:
-    """Seed 000's GMR meander: 0.131 mV per A/m at a 0.6 V bias.
+    """The GMR meander of Sajat's (2008) magnetic-suspension thesis: 0.131 mV per A/m at a 0.6 V bias.
 
     0.131 mV per A/m of H is 0.131e-3 / (0.6 * MU0) = 173.7 /T relative change per
-    tesla of B = mu0 H. Seed 000 does not give R0 legibly; every output voltage depends
+    tesla of B = mu0 H. The thesis does not give R0 legibly; every output voltage depends
     on it only through I R0 = 0.6 V, so ``resistance`` is a placeholder. The thesis
     reports no saturation over its measurements: the element is ideal linear.
     """
@@ -181,3 +182,13 @@ def panasonic_meander(resistance: float = 1e3) -> SpinValve:
         sensitivity=0.131e-3 / (bias_voltage * MU0),
         bias_current=bias_voltage / resistance,
     )
+
+
+def nve_aa003() -> SpinValve:
+    """NVE AA003-02 GMR bridge at a 5 V supply, from NVE's AA-series catalogue.
+
+    A 5 kOhm bridge, sensitivity 2.0-3.2 mV/V/Oe (mid value 2.6 mV/V per 0.1 mT: 26 /T of
+    output per supply volt), linear to 14 Oe (1.4 mT), saturating at 20 Oe (2 mT); 5 V
+    across 5 kOhm is a 1 mA bias.
+    """
+    return SpinValve(resistance=5e3, sensitivity=26.0, bias_current=1e-3, linear_range=1.4e-3, saturation_field=2.0e-3)

@@ -1,4 +1,4 @@
-"""Three-axis Hall sensors (PHYSICS.md 3): gain, offset, noise, saturation, quantisation.
+"""Three-axis Hall sensors: gain, offset, noise, saturation, quantisation.
 
 Each stage of the read-out is a small pure function, so that a scene applies only the
 stages (effects) it lists; :class:`Hall3D` chains them all for a whole reading:
@@ -143,25 +143,23 @@ class Hall3D(eqx.Module):
             reading = saturate(reading, self.full_scale)
         return quantise(reading, self.lsb, straight_through=smooth)
 
-    def counts(
-        self, b: Float[ArrayLike, "... 3"], *, key: PRNGKeyArray | None = None
-    ) -> Float[Array, "... 3"]:
+    def counts(self, b: Float[ArrayLike, "... 3"], *, key: PRNGKeyArray | None = None) -> Float[Array, "... 3"]:
         """The raw output in counts (integer-valued floats), (..., 3)."""
         return jnp.round(self(b, key=key) / self.lsb)
 
 
 def ak8963() -> Hall3D:
-    """AKM AK8963 in 16-bit mode, as used in seed 001.
+    """AKM AK8963 in 16-bit mode, as used in the dome-Hall sensor.
 
     0.15 uT per LSB (AK8963 datasheet, 16-bit output); saturation at 4.8 mT, the
-    figure seed 001 designs against (the datasheet's range is +-4912 uT). No noise by
+    figure the dome-Hall paper designs against (the datasheet's range is +-4912 uT). No noise by
     default: pass ``noise_std`` through ``eqx.tree_at`` where wanted.
     """
     return Hall3D(lsb=0.15 * uT, full_scale=4.8 * mT)
 
 
 def mlx90393(gain_sel: int = 7, resolution: int = 0) -> Hall3D:
-    """Melexis MLX90393 (seed 004's taxel sensor) at a gain and resolution setting.
+    """Melexis MLX90393 (the taxel sensor of Yan et al. 2021) at a gain and resolution setting.
 
     LSB sizes from the Melexis MLX90393 datasheet (rev. 003, 2017), sensitivity table
     for HALLCONF = 0xC: 0.150 uT (x, y) and 0.242 uT (z) per count at GAIN_SEL = 7,
@@ -169,7 +167,7 @@ def mlx90393(gain_sel: int = 7, resolution: int = 0) -> Hall3D:
     them. The output is a signed 16-bit word for RES_XYZ = 0 and 1 (the only settings
     offered here), so the reading saturates at 32767 counts: 4.9 mT (x, y) and 7.9 mT (z)
     at the default setting, up to 49 mT at GAIN_SEL = 0, RES_XYZ = 1 (the datasheet's
-    5..50 mT dynamic range). Seed 004 does not state its setting; the default is the
+    5..50 mT dynamic range). Yan et al. do not state their setting; the default is the
     finest resolution.
     """
     if gain_sel not in range(8):

@@ -1,7 +1,8 @@
-"""Chip inductors as flux-rate sensors, and seed 003's stick-slip detector.
+"""Chip inductors as flux-rate sensors, and the stick-slip detector of the GMR-inductor paper
+("A Magnetic Type Tactile Sensor by GMR elements and inductors", Sec. II-C).
 
 A coil of N turns linking the flux Phi(t) gives EMF = -N dPhi/dt (Faraday); it is
-large at the instant of a stick-slip, when the deformed layer snaps back. Seed 003 flags
+large at the instant of a stick-slip, when the deformed layer snaps back. The paper flags
 a slip when the output V_now of every inductor leaves A - 3 sigma <= V_now <= A + 3 sigma,
 A and sigma the mean and standard deviation of that inductor's recent outputs.
 
@@ -25,17 +26,15 @@ def emf(flux: Float[ArrayLike, "time ..."], *, dt: float, turns: float = 1.0) ->
     return -turns * jnp.gradient(flux, dt, axis=0)
 
 
-def slip_flags(
-    signal: Float[ArrayLike, "time channels"], *, window: int, n_sigma: float = 3.0
-) -> Bool[Array, " time"]:
-    """Seed 003's slip test: True where every channel leaves mean +- n_sigma * std.
+def slip_flags(signal: Float[ArrayLike, "time channels"], *, window: int, n_sigma: float = 3.0) -> Bool[Array, " time"]:
+    """The GMR-inductor paper's slip test: True where every channel leaves mean +- n_sigma * std.
 
     Args:
         signal: outputs (V or any unit), shape (time, channels) or (time,) for one channel.
         window: number of trailing samples (before the current one) that give the
             mean A and standard deviation sigma; a Python int (static under jit).
             The first ``window`` samples have no full history and are never flagged.
-        n_sigma: half-width of the band in standard deviations (3 in seed 003).
+        n_sigma: half-width of the band in standard deviations (3 in the GMR-inductor paper).
 
     Returns:
         (time,) booleans, True where all channels are outside their band at once.

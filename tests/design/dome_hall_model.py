@@ -1,4 +1,4 @@
-"""The built-in default design (seed 001, PHYSICS.md 2.3) written by hand as a plain model:
+"""The built-in default design (the dome-Hall sensor) written by hand as a plain model:
 a test problem for the solver with closed-form answers, and an independent check of the
 scene chain that the spec (magdesign/design/default.toml, the one definition) runs.
 

@@ -1,6 +1,6 @@
 """The design solver against optima known in closed form (issue 5 acceptance).
 
-Expected values come from closed forms written here (seed 001 Eq. 1, Reissner's dome
+Expected values come from closed forms written here (the dome-Hall paper's Eq. 1, Reissner's dome
 stiffness, the film's exponential decay) solved by scipy's brentq or by hand, never from
 the solver; material constants (E, nu) are read from the material. Each problem is solved from three starts, one of them on a bound.
 """
@@ -10,9 +10,9 @@ import math
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from dome_hall_model import default_problem
 from scipy.optimize import brentq
 
-from dome_hall_model import default_problem
 from magdesign.design import Limit, Objective, Problem, Target, Variable, multistart, solve, sweep
 from magdesign.design.problem import per_problem
 from magdesign.fields import cylinder_on_axis, film_magnitude
@@ -20,7 +20,7 @@ from magdesign.mechanics import dome_compliance
 from magdesign.units import mm, mT
 
 RTOL = 1e-9
-R, D, BR = 1.5 * mm, 1.0 * mm, 1.17  # seed 001: N35, 3 mm x 1 mm
+R, D, BR = 1.5 * mm, 1.0 * mm, 1.17  # the dome-Hall paper's N35 magnet, 3 mm x 1 mm
 OUTER = 8.0 * mm
 FORCE = 5.0
 COMPLIANCE = 0.32 * mm  # m/N
@@ -28,7 +28,7 @@ SATURATION = 4.8 * mT
 
 
 def bz_closed(z):
-    """Seed 001 Eq. 1, plain floats."""
+    """The dome-Hall paper's Eq. 1 (on-axis field of a cylinder), plain floats."""
     return BR / 2 * ((D + z) / math.sqrt(R**2 + (D + z) ** 2) - z / math.sqrt(R**2 + z**2))
 
 
@@ -132,7 +132,7 @@ def test_c_film_depth_keeping_a_fraction_of_the_surface_field():
         result = solve(problem, start={"depth": start})
         assert result.status == "successful"
         assert_rel(result.parameters["depth"], depth(FRACTION), RTOL)
-    assert_rel(depth(FRACTION), 3.736 * mm, 1e-3)  # PHYSICS.md 1.2: 98 % attenuation
+    assert_rel(depth(FRACTION), 3.736 * mm, 1e-3)  # ln(50) T / (2 pi): 98 % attenuation (Yan et al. 2021 print 3.8 mm)
     assert_rel(result.derivatives["fraction"]["depth"], central(depth, FRACTION), 1e-6)
 
 
@@ -202,9 +202,7 @@ def test_default_design_reissner_closed_form():
     by_compliance = lambda c, name: default_expected(compliance=c)[name]  # noqa: E731
     by_saturation = lambda b, name: default_expected(saturation=b)[name]  # noqa: E731
     for name in ("gap", "thickness"):
-        assert_rel(
-            result.derivatives["compliance"][name], central(lambda c: by_compliance(c, name), COMPLIANCE), 1e-6
-        )
+        assert_rel(result.derivatives["compliance"][name], central(lambda c: by_compliance(c, name), COMPLIANCE), 1e-6)
     assert_rel(
         result.derivatives["field_closest.upper"]["gap"],
         central(lambda b: by_saturation(b, "gap"), SATURATION),
@@ -268,7 +266,13 @@ def test_bad_configuration_names_the_argument():
     with pytest.raises(ValueError, match="duplicate"):
         Problem(field_model, [Variable("gap", 1 * mm, 5 * mm)] * 2, [Target("field", 1.0)])
     with pytest.raises(ValueError, match="remanence: the model reads an input"):
-        solve(Problem(lambda v: {"field": v["gap"] * v["remanence"]}, [Variable("gap", 1 * mm, 5 * mm)], [Target("field", 1.0)]))
+        solve(
+            Problem(
+                lambda v: {"field": v["gap"] * v["remanence"]},
+                [Variable("gap", 1 * mm, 5 * mm)],
+                [Target("field", 1.0)],
+            )
+        )
     with pytest.raises(ValueError, match="scale"):
         Target("field", 0.0)
 
@@ -295,7 +299,9 @@ def test_a_problem_keeps_its_numbers_when_the_callers_array_changes():
     # a Problem holds copies: changing the array it was built from later changes nothing
     # (the solver keeps per-problem arrays; a shared array would make them stale)
     lower = np.array(0.5)
-    problem = Problem(lambda p: {"square": p["x"] ** 2}, [Variable("x", lower, 3.0, start=1.0)], [Target("square", 2.0)])
+    problem = Problem(
+        lambda p: {"square": p["x"] ** 2}, [Variable("x", lower, 3.0, start=1.0)], [Target("square", 2.0)]
+    )
     lower[...] = 1.6  # above sqrt(2): had the problem seen it, x would stop at 1.6
     result = solve(problem)
     assert result.successful and result.parameters["x"] == pytest.approx(math.sqrt(2.0), rel=1e-9)

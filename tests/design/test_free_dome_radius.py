@@ -9,6 +9,7 @@ its radius inside its own bounds. Expected values are that closed form, never th
 import math
 
 from dome_hall_model import default_problem
+
 from magdesign.design import Objective, Problem, Target, Variable, solve
 from magdesign.mechanics import dome_compliance
 from magdesign.units import mm
@@ -20,7 +21,10 @@ MATERIAL = default_problem().model.material
 
 def dome_model(v):
     compliance = dome_compliance(
-        outer_radius=v["outer_radius"], thickness=v["thickness"], material=MATERIAL, max_force=FORCE,
+        outer_radius=v["outer_radius"],
+        thickness=v["thickness"],
+        material=MATERIAL,
+        max_force=FORCE,
         fidelity="reissner",
     )
     return {"compliance": compliance, "outer_radius": v["outer_radius"]}

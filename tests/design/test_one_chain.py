@@ -55,10 +55,14 @@ def _magnet_measures(sim, parameters, scene):
     thickness = parameters.get("mechanics.thickness", float(mechanics.thickness))
     if hasattr(mechanics, "outer_radius"):  # a dome bottoms out at its inner height
         room = parameters.get("mechanics.outer_radius", float(mechanics.outer_radius)) - thickness
+        summit = room + thickness  # the dome's outer apex
     else:  # a layer when pressed to nothing
-        room = thickness
+        room = summit = thickness  # its top face
+    ideal = chip if scene.reading_unit == "T" else np.asarray(scene.transducer(sim.chip_field))[..., None]
     return {
         "travel_fraction": np.max(-uz) / room,
+        "embed": summit - gap,
+        "saturation_ratio": np.max(np.abs(ideal) / _chip_range(scene)),
         "compliance": (uz[0] - uz[top]) / press,
         "closest_gap": gap + uz.min(),
         "field_rest": chip[0, 0, 2],
@@ -68,8 +72,16 @@ def _magnet_measures(sim, parameters, scene):
         "inplane_field_max": np.abs(chip[..., 0]).max(),
         "inplane_field_min": chip[..., 0].min(),
         "outer_radius": parameters.get("mechanics.outer_radius"),
-        "wall_fraction": thickness / parameters.get("mechanics.outer_radius", float(getattr(mechanics, "outer_radius", np.nan))),
+        "wall_fraction": thickness
+        / parameters.get("mechanics.outer_radius", float(getattr(mechanics, "outer_radius", np.nan))),
     }
+
+
+def _chip_range(scene):
+    """The range the readings are judged against: the saturation effect's limit, else a
+    Hall chip's full scale (its preset's)."""
+    listed = [e.limit for e in scene.effects if e.name == "saturation"]
+    return np.asarray(listed[0] if listed else getattr(scene, "hall", getattr(scene, "transducer", None)).full_scale)
 
 
 def _film_measures(sim, parameters, scene, simulate_at):
@@ -77,15 +89,18 @@ def _film_measures(sim, parameters, scene, simulate_at):
     centre = (rows // 2) * cols + cols // 2
     period = parameters.get("magnet.period", float(scene.period))
     k = 2 * np.pi / period
-    # |B| of an infinite film at its own face: J0 (1 - e^{-kd}) (PHYSICS.md 1.2), J0 drifted
+    # |B| of an infinite film at its own face: J0 (1 - e^{-kd}) (magdesign.fields.film), J0 drifted
     drift = [e for e in scene.effects if e.name == "temperature_drift"]
     j0 = float(scene.magnetization) * (1 + float(drift[0].coefficient * drift[0].temperature_change) if drift else 1.0)
     face = j0 * (1 - np.exp(-k * float(scene.film_thickness)))
-    around_rest = np.linalg.norm(np.asarray(simulate_at(Loads(np.array([-FORCE_STEP, 0.0, FORCE_STEP]))).field)[:, centre], axis=-1)
+    around_rest = np.linalg.norm(
+        np.asarray(simulate_at(Loads(np.array([-FORCE_STEP, 0.0, FORCE_STEP]))).field)[:, centre], axis=-1
+    )
     return {
         "field_fraction": around_rest[1] / face,
         "normal_sensitivity": (around_rest[2] - around_rest[0]) / (2 * FORCE_STEP),
         "shear_phase_max": k * np.abs(np.asarray(sim.displacement)[:, 0]).max(),
+        "saturation_ratio": np.max(np.abs(np.asarray(sim.chip_field)) / _chip_range(scene)),
     }
 
 

@@ -11,11 +11,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers_problems import BOX, HOCK_SCHITTKOWSKI, Published
 from scipy.optimize import nnls
 
 from magdesign.design import DesignStatus, Limit, Objective, Problem, Target, Variable, solve
 from magdesign.design.report import STATUS_NAMES
-from helpers_problems import BOX, HOCK_SCHITTKOWSKI, Published
 
 TOL = 1e-6
 EXAMPLES = Path(__file__).parents[2] / "examples"
@@ -66,7 +66,9 @@ def test_a_limit_at_any_distance_from_a_bound(gap, width):
     active; where the limit lies inside the box, the bound is not held, and x moves with the
     limit one to one (a limit 1e-13 of the box's width inside it once brought the bound in)."""
     problem = Problem(
-        lambda v: {"x": v["x"]}, [Variable("x", 0.0, width)], limits=[Limit("x", upper=width - gap, scale=1.0)],
+        lambda v: {"x": v["x"]},
+        [Variable("x", 0.0, width)],
+        limits=[Limit("x", upper=width - gap, scale=1.0)],
         objective=Objective("x", "max"),
     )
     result = solve(problem)
@@ -82,8 +84,10 @@ def test_a_limit_that_cannot_hold_is_violated_not_active():
     """minimise x^2 with x <= 2 and x in [3, 4]: the limit cannot hold; the result says
     limit_violated at x = 3 (closest), and does not call the broken limit active."""
     problem = Problem(
-        lambda v: {"x": v["x"], "square": v["x"] ** 2}, [Variable("x", 3.0, 4.0)],
-        limits=[Limit("x", upper=2.0, scale=1.0)], objective=Objective("square", "min"),
+        lambda v: {"x": v["x"], "square": v["x"] ** 2},
+        [Variable("x", 3.0, 4.0)],
+        limits=[Limit("x", upper=2.0, scale=1.0)],
+        objective=Objective("square", "min"),
     )
     result = solve(problem)
     assert result.status == "limit_violated"
@@ -100,8 +104,10 @@ def test_constrained_maximum_is_not_taken_for_a_minimum(start):
     """minimise x y with x + y = 0 on [-2, 2]^2: (0, 0) is the constrained maximum (-x^2 on
     the line); the minima are (2, -2) and (-2, 2), where both bounds and the target meet."""
     problem = Problem(
-        saddle_product, [Variable("x", -2.0, 2.0), Variable("y", -2.0, 2.0)],
-        targets=[Target("sum", 0.0, scale=1.0)], objective=Objective("xy", "min"),
+        saddle_product,
+        [Variable("x", -2.0, 2.0), Variable("y", -2.0, 2.0)],
+        targets=[Target("sum", 0.0, scale=1.0)],
+        objective=Objective("xy", "min"),
     )
     result = solve(problem, start={"x": start[0], "y": start[1]})
     assert result.status == "successful"
@@ -115,8 +121,11 @@ def saddle(v):
 
 def test_a_saddle_start_is_left_downhill():
     """f = x^2 - y^2 + y^4 / 10 on [-3, 3]^2 from its saddle (0, 0): minima at y^2 = 5."""
-    problem = Problem(saddle, [Variable("x", -3.0, 3.0, start=0.0), Variable("y", -3.0, 3.0, start=0.0)],
-                      objective=Objective("f", "min"))
+    problem = Problem(
+        saddle,
+        [Variable("x", -3.0, 3.0, start=0.0), Variable("y", -3.0, 3.0, start=0.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful"
     assert result.parameters["x"] == pytest.approx(0.0, abs=1e-9)
@@ -127,8 +136,11 @@ def test_a_saddle_start_is_left_downhill():
 def test_a_saddle_is_left_uphill_for_a_maximum():
     """maximise f = x^2 - y^2 + y^4 / 10 on [-3, 3]^2 from its saddle (0, 0): the maxima are
     x = +-3, y = 0 (f = 9; at the corners f = 9 - 9 + 8.1 = 8.1 only)."""
-    problem = Problem(saddle, [Variable("x", -3.0, 3.0, start=0.0), Variable("y", -3.0, 3.0, start=0.0)],
-                      objective=Objective("f", "max"))
+    problem = Problem(
+        saddle,
+        [Variable("x", -3.0, 3.0, start=0.0), Variable("y", -3.0, 3.0, start=0.0)],
+        objective=Objective("f", "max"),
+    )
     result = solve(problem)
     assert result.status == "successful"
     assert result.outputs["f"] == pytest.approx(9.0, rel=1e-12)
@@ -143,9 +155,12 @@ def test_a_saddle_vertex_is_left_on_the_side_its_limit_allows(start):
     objective falls along -x (f = -2 - x^2) and the limit forbids +x. The escape went +x
     (the box has as much room there), each failed, and the result was "not_a_minimum".
     The minima are the vertices (-1, -1), (1, -1) and (-1, 1), f = -3."""
-    problem = Problem(lambda v: {"f": -(v["x"] ** 2 + 2.0 * v["y"] ** 2), "s": v["x"] + v["y"]},
-                      [Variable("x", -1.0, 1.0), Variable("y", -1.0, 1.0)],
-                      limits=[Limit("s", upper=1.0)], objective=Objective("f", "min"))
+    problem = Problem(
+        lambda v: {"f": -(v["x"] ** 2 + 2.0 * v["y"] ** 2), "s": v["x"] + v["y"]},
+        [Variable("x", -1.0, 1.0), Variable("y", -1.0, 1.0)],
+        limits=[Limit("s", upper=1.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem, start={"x": start[0], "y": start[1]})
     assert result.status == "successful"
     assert result.outputs["f"] == pytest.approx(-3.0, rel=1e-12)
@@ -169,15 +184,18 @@ def test_an_inflection_is_not_taken_for_a_minimum(start):
 
 
 def quartic_ridge(v):
-    return {"f": -v["x"] ** 4 + (v["y"] - 0.3) ** 2}
+    return {"f": -(v["x"] ** 4) + (v["y"] - 0.3) ** 2}
 
 
 def test_a_flat_maximum_is_left():
     """minimise -x^4 + (y - 0.3)^2 on [-1, 1]^2 from (0, 0): along x the start is a maximum
     with zero curvature (the Hessian there is diag(0, 2)); the minima are x = +-1, y = 0.3,
     f = -1. The search used to stop at (0, 0.3), "successful"."""
-    problem = Problem(quartic_ridge, [Variable("x", -1.0, 1.0, start=0.0), Variable("y", -1.0, 1.0, start=0.0)],
-                      objective=Objective("f", "min"))
+    problem = Problem(
+        quartic_ridge,
+        [Variable("x", -1.0, 1.0, start=0.0), Variable("y", -1.0, 1.0, start=0.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful"
     assert abs(result.parameters["x"]) == 1.0
@@ -191,8 +209,12 @@ QUARTICS = {
     "(x - 0.3)^4 + 1": (lambda v: {"f": (v["x"] - 0.3) ** 4 + 1.0}, "min", {"x": -1.0}, {"x": 0.3}),
     "-(x - 0.3)^4": (lambda v: {"f": -((v["x"] - 0.3) ** 4)}, "max", {"x": 1.0}, {"x": 0.3}),
     "x^4 + y^2": (lambda v: {"f": v["x"] ** 4 + v["y"] ** 2}, "min", {"x": 1.0, "y": 0.5}, {"x": 0.0, "y": 0.0}),
-    "(x - y)^4 + (x + y - 1)^2": (lambda v: {"f": (v["x"] - v["y"]) ** 4 + (v["x"] + v["y"] - 1.0) ** 2}, "min",
-                                  {"x": 1.0, "y": 0.5}, {"x": 0.5, "y": 0.5}),
+    "(x - y)^4 + (x + y - 1)^2": (
+        lambda v: {"f": (v["x"] - v["y"]) ** 4 + (v["x"] + v["y"] - 1.0) ** 2},
+        "min",
+        {"x": 1.0, "y": 0.5},
+        {"x": 0.5, "y": 0.5},
+    ),
 }
 
 
@@ -203,8 +225,9 @@ def test_a_degenerate_minimum_is_found(name):
     that Newton's steps became gradient steps that crawled: "max_steps_reached" 4e-4 from
     the minimum after 100 evaluations."""
     model, sense, start, expected = QUARTICS[name]
-    problem = Problem(model, [Variable(k, -2.0, 2.0, start=value) for k, value in start.items()],
-                      objective=Objective("f", sense))
+    problem = Problem(
+        model, [Variable(k, -2.0, 2.0, start=value) for k, value in start.items()], objective=Objective("f", sense)
+    )
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
     for k, value in expected.items():
@@ -216,9 +239,12 @@ def test_a_degenerate_minimum_on_a_target_is_found():
     >= 0, and y = 1 - x). y is flat, and the QP's Hessian floor on it became curvature along
     the target's line, where x^4's own vanishes: the steps crawled at 1/130 of Newton's,
     "max_steps_reached" 4e-4 from the minimum after 100 evaluations."""
-    problem = Problem(lambda v: {"f": v["x"] ** 4, "s": v["x"] + v["y"]},
-                      [Variable("x", -2.0, 2.0, start=1.0), Variable("y", -2.0, 2.0, start=0.5)],
-                      targets=[Target("s", 1.0)], objective=Objective("f", "min"))
+    problem = Problem(
+        lambda v: {"f": v["x"] ** 4, "s": v["x"] + v["y"]},
+        [Variable("x", -2.0, 2.0, start=1.0), Variable("y", -2.0, 2.0, start=0.5)],
+        targets=[Target("s", 1.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
     assert result.parameters["x"] == pytest.approx(0.0, abs=1e-6)
@@ -232,9 +258,12 @@ def test_a_degenerate_minimum_on_a_limit_is_found():
     curvature along the limit's line, as along a target's, and the steps crawled:
     "max_steps_reached" 1.5e-6 from the minimum after 100 evaluations. x is as good as a
     quartic's stationarity tolerance allows (f - f* = x^4)."""
-    problem = Problem(lambda v: {"f": v["x"] ** 4 - (v["x"] + v["y"]), "s": v["x"] + v["y"]},
-                      [Variable("x", -2.0, 2.0, start=1.0), Variable("y", -2.0, 2.0, start=-0.5)],
-                      limits=[Limit("s", upper=1.0)], objective=Objective("f", "min"))
+    problem = Problem(
+        lambda v: {"f": v["x"] ** 4 - (v["x"] + v["y"]), "s": v["x"] + v["y"]},
+        [Variable("x", -2.0, 2.0, start=1.0), Variable("y", -2.0, 2.0, start=-0.5)],
+        limits=[Limit("s", upper=1.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
     assert result.parameters["x"] == pytest.approx(0.0, abs=1e-5)
@@ -244,9 +273,12 @@ def test_a_degenerate_minimum_on_a_limit_is_found():
 
 def _concave_on_simplex(n, start):
     names = "xyz"[:n]
-    return Problem(lambda v: {"f": -sum(v[k] ** 2 for k in names), "s": sum(v[k] for k in names)},
-                   [Variable(k, 0.0, 1.0, start=s) for k, s in zip(names, start)],
-                   limits=[Limit("s", upper=1.0)], objective=Objective("f", "min"))
+    return Problem(
+        lambda v: {"f": -sum(v[k] ** 2 for k in names), "s": sum(v[k] for k in names)},
+        [Variable(k, 0.0, 1.0, start=s) for k, s in zip(names, start)],
+        limits=[Limit("s", upper=1.0)],
+        objective=Objective("f", "min"),
+    )
 
 
 @pytest.mark.parametrize(
@@ -276,10 +308,12 @@ def test_a_saddle_whose_weak_rows_block_one_direction_is_left_along_another():
     edge to a minimum, (+-1, -1), f = -1.5 (f >= -x^2 - y^2 / 2 >= -1 - 1/2 on the
     feasible set). A check that held every weakly active row would call the apex a
     minimum."""
-    problem = Problem(lambda v: {"f": -(v["x"] ** 2 + 0.5 * v["y"] ** 2), "a": v["x"] + v["y"], "b": v["y"] - v["x"]},
-                      [Variable("x", -1.0, 1.0, start=0.0), Variable("y", -1.0, 1.0, start=0.0)],
-                      limits=[Limit("a", upper=0.0, scale=1.0), Limit("b", upper=0.0, scale=1.0)],
-                      objective=Objective("f", "min"))
+    problem = Problem(
+        lambda v: {"f": -(v["x"] ** 2 + 0.5 * v["y"] ** 2), "a": v["x"] + v["y"], "b": v["y"] - v["x"]},
+        [Variable("x", -1.0, 1.0, start=0.0), Variable("y", -1.0, 1.0, start=0.0)],
+        limits=[Limit("a", upper=0.0, scale=1.0), Limit("b", upper=0.0, scale=1.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
     assert abs(result.parameters["x"]) == pytest.approx(1.0, abs=1e-12)
@@ -295,10 +329,12 @@ def test_a_flat_way_out_on_a_face_is_probed():
     minimum: with y <= x^2 <= 1, f >= -2 x^4 >= -2, reached at (+-1, 1, 0). Taking the
     point for a minimum once no face had negative curvature called it "successful" (a
     review's counter-example)."""
-    problem = Problem(lambda v: {"f": -(v["y"] ** 2 + v["x"] ** 4) + v["z"] ** 2, "g": v["y"] - v["x"] ** 2},
-                      [Variable("x", -1.0, 1.0, start=0.0), Variable("y", 0.0, 1.0, start=0.0),
-                       Variable("z", -1.0, 1.0, start=0.3)],
-                      limits=[Limit("g", upper=0.0, scale=1.0)], objective=Objective("f", "min"))
+    problem = Problem(
+        lambda v: {"f": -(v["y"] ** 2 + v["x"] ** 4) + v["z"] ** 2, "g": v["y"] - v["x"] ** 2},
+        [Variable("x", -1.0, 1.0, start=0.0), Variable("y", 0.0, 1.0, start=0.0), Variable("z", -1.0, 1.0, start=0.3)],
+        limits=[Limit("g", upper=0.0, scale=1.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
     assert abs(result.parameters["x"]) == pytest.approx(1.0, abs=1e-12)
@@ -312,8 +348,9 @@ def test_a_minimum_too_flat_for_the_search_is_polished():
     each 4/5 of the last, go further than the polish's reach, to a lower objective, and
     meet their equations: the polish's point stands (before, the search's did, and before
     that the solve ended "max_steps_reached" after 33 of 100 evaluations)."""
-    problem = Problem(lambda v: {"f": v["x"] ** 6}, [Variable("x", -2.0, 2.0, start=1.0)],
-                      objective=Objective("f", "min"))
+    problem = Problem(
+        lambda v: {"f": v["x"] ** 6}, [Variable("x", -2.0, 2.0, start=1.0)], objective=Objective("f", "min")
+    )
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
     assert abs(result.parameters["x"]) < 1e-3
@@ -325,8 +362,11 @@ def test_an_ill_conditioned_minimum_is_polished_to_its_point():
     to its gradient at the start, fell below rounding 0.04 from the minimum, where the
     search stopped, and the polish's exact Newton step there went further than its reach
     and was dropped: "successful" at (0.5625, 0.4375)."""
-    problem = Problem(lambda v: {"f": 1e10 * (v["x"] + v["y"] - 1) ** 2 + (v["x"] - v["y"] - 0.2) ** 2},
-                      [Variable("x", -2.0, 2.0), Variable("y", -2.0, 2.0)], objective=Objective("f", "min"))
+    problem = Problem(
+        lambda v: {"f": 1e10 * (v["x"] + v["y"] - 1) ** 2 + (v["x"] - v["y"] - 0.2) ** 2},
+        [Variable("x", -2.0, 2.0), Variable("y", -2.0, 2.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
     assert result.parameters["x"] == pytest.approx(0.6, abs=1e-10)
@@ -338,18 +378,23 @@ def test_a_maximum_reached_from_a_plateau_is_successful():
     maximum is x = 1. The objective's scale, 1 / its gradient at the start, makes its
     Hessian there 3e11 (scaled variables), so that y's rounding alone leaves a
     stationarity residual of 1e-5, above sqrt(rtol): it was "max_steps_reached" at x = 1."""
-    problem = Problem(lambda v: {"g": jnp.exp(-((v["x"] - 1.0) ** 2))}, [Variable("x", -10.0, 10.0, start=-4.0)],
-                      objective=Objective("g", "max"))
+    problem = Problem(
+        lambda v: {"g": jnp.exp(-((v["x"] - 1.0) ** 2))},
+        [Variable("x", -10.0, 10.0, start=-4.0)],
+        objective=Objective("g", "max"),
+    )
     result = solve(problem)
     assert result.status == "successful", (result.status, result.parameters)
     assert result.parameters["x"] == pytest.approx(1.0, abs=1e-7)
 
 
 HS055_FROM_ITS_OTHER_MINIMUM = Published(
-    "hs055", lambda x: x[0] + 2.0 * x[1] + 4.0 * x[4] + jnp.exp(x[0] * x[3]),
+    "hs055",
+    lambda x: x[0] + 2.0 * x[1] + 4.0 * x[4] + jnp.exp(x[0] * x[3]),
     [(0.0, 1.0), (0.0, 100.0), (0.0, 100.0), (0.0, 1.0), (0.0, 100.0), (0.0, 100.0)],
     [1.0, 2.3886625868024174, 0.12140507965213132, 0.0, 0.08881893317062156, 2.440728065086827],
-    [1.0, 5.0 / 3.0, 1.0 / 3.0, 0.0, 1.0 / 3.0, 5.0 / 3.0], 20.0 / 3.0,
+    [1.0, 5.0 / 3.0, 1.0 / 3.0, 0.0, 1.0 / 3.0, 5.0 / 3.0],
+    20.0 / 3.0,
     h=[
         lambda x: x[0] + 2.0 * x[1] + 5.0 * x[4] - 6.0,
         lambda x: x[0] + x[1] + x[2] - 3.0,
@@ -381,8 +426,10 @@ def test_an_inactive_bound_beside_dependent_targets_is_not_held():
 HS108 = Published(
     "hs108",
     lambda x: -0.5 * (x[0] * x[3] - x[1] * x[2] + x[2] * x[8] - x[4] * x[8] + x[4] * x[7] - x[5] * x[6]),
-    [(-BOX, BOX)] * 8 + [(0.0, BOX)], [1.0] * 9,
-    [0.8841292, 0.4672425, 0.03742076, 0.9992996, 0.8841292, 0.4672425, 0.03742076, 0.9992996, 0.0], -0.8660254038,
+    [(-BOX, BOX)] * 8 + [(0.0, BOX)],
+    [1.0] * 9,
+    [0.8841292, 0.4672425, 0.03742076, 0.9992996, 0.8841292, 0.4672425, 0.03742076, 0.9992996, 0.0],
+    -0.8660254038,
     g=[
         lambda x: 1.0 - x[2] ** 2 - x[3] ** 2,
         lambda x: 1.0 - x[8] ** 2,
@@ -423,8 +470,12 @@ UNREACHABLE = {
     "x^2 = -1": (lambda v: {"q": v["x"] ** 2}, [("x", -2.0, 2.0)], Target("q", -1.0), {"x": 0.0}),
     "sin x = 2": (lambda v: {"q": jnp.sin(v["x"])}, [("x", -3.0, 3.0)], Target("q", 2.0), {"x": math.pi / 2}),
     "cos x = 1.5": (lambda v: {"q": jnp.cos(v["x"])}, [("x", -1.0, 2.0)], Target("q", 1.5), {"x": 0.0}),
-    "x^2 + y^2 = -1": (lambda v: {"q": v["x"] ** 2 + v["y"] ** 2}, [("x", -2.0, 2.0), ("y", -1.0, 1.0)],
-                       Target("q", -1.0), {"x": 0.0, "y": 0.0}),
+    "x^2 + y^2 = -1": (
+        lambda v: {"q": v["x"] ** 2 + v["y"] ** 2},
+        [("x", -2.0, 2.0), ("y", -1.0, 1.0)],
+        Target("q", -1.0),
+        {"x": 0.0, "y": 0.0},
+    ),
     "x^2 <= -1": (lambda v: {"q": v["x"] ** 2}, [("x", -2.0, 2.0)], Limit("q", upper=-1.0), {"x": 0.0}),
 }
 
@@ -438,8 +489,9 @@ def test_a_target_that_no_point_meets_is_reported_as_such(name):
     status that names the unmet row."""
     model, variables, row, closest = UNREACHABLE[name]
     is_target = isinstance(row, Target)
-    problem = Problem(model, [Variable(*v) for v in variables], targets=[row] if is_target else [],
-                      limits=[] if is_target else [row])
+    problem = Problem(
+        model, [Variable(*v) for v in variables], targets=[row] if is_target else [], limits=[] if is_target else [row]
+    )
     result = solve(problem)
     assert result.status == ("infeasible_target" if is_target else "limit_violated")
     assert result.violated == ("q" if is_target else "q.upper",)
@@ -458,8 +510,11 @@ def test_powells_badly_scaled_system_is_solved(start):
     sign from step to step: where that alone counted as overshooting the point of least
     violation and halved the radius, the search crawled and ended "max_steps_reached"
     from (0.1, 0.1) and (0.2, 0.2) (a reviewer's find, before that rule was committed)."""
-    problem = Problem(powell_badly_scaled, [Variable("x", 0.0, 10.0, start=start[0]), Variable("y", 0.0, 10.0, start=start[1])],
-                      targets=[Target("a", 1.0), Target("b", 1.0001)])
+    problem = Problem(
+        powell_badly_scaled,
+        [Variable("x", 0.0, 10.0, start=start[0]), Variable("y", 0.0, 10.0, start=start[1])],
+        targets=[Target("a", 1.0), Target("b", 1.0001)],
+    )
     result = solve(problem)
     assert result.status == "successful", (result.status, result.steps)
     root = sorted([result.parameters["x"], result.parameters["y"]])
@@ -481,8 +536,12 @@ def test_a_cubic_saddle_beside_an_ignored_variable_is_left(start, disk, expected
     (inside the disk: (0, -1)). The steps approach y = 0 linearly (Newton halves y^3's y),
     and the probe of the point went along x alone, whose curvature (0) is below y's
     (6 y): "successful" at y = 0. Now the probe tries the steps' approach too."""
-    problem = Problem(cube_of_y, [Variable("x", -2.0, 2.0, start=start[0]), Variable("y", -2.0, 2.0, start=start[1])],
-                      limits=[Limit("r2", upper=1.0)] if disk else [], objective=Objective("f", "min"))
+    problem = Problem(
+        cube_of_y,
+        [Variable("x", -2.0, 2.0, start=start[0]), Variable("y", -2.0, 2.0, start=start[1])],
+        limits=[Limit("r2", upper=1.0)] if disk else [],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful"
     assert result.parameters["y"] == pytest.approx(expected_y, abs=1e-9)
@@ -505,8 +564,12 @@ def cube_beside_an_indefinite_bowl(v):
         # the start's one step (along z, curvature 200) looks like a linear approach
         (cube_beside_a_bowl, {"y": 0.0, "z": 1e-8}, [], {"y": -1.0, "z": 0.0}),
         # s and r approach 0 linearly (the Hessian's moduli make the steps inexact), u held at 0
-        (cube_beside_an_indefinite_bowl, {"s": 0.5, "r": 0.5, "u": 0.0, "w": 0.0}, [Target("u1", 1.0)],
-         {"s": 0.0, "r": 0.0, "u": 0.0, "w": -1.0}),
+        (
+            cube_beside_an_indefinite_bowl,
+            {"s": 0.5, "r": 0.5, "u": 0.0, "w": 0.0},
+            [Target("u1", 1.0)],
+            {"s": 0.0, "r": 0.0, "u": 0.0, "w": -1.0},
+        ),
     ],
 )
 def test_a_curved_approach_does_not_hide_a_flat_direction(model, start, targets, expected):
@@ -514,8 +577,12 @@ def test_a_curved_approach_does_not_hide_a_flat_direction(model, start, targets,
     steps came from (z, or s and r) rose quadratically on both sides of the point and
     found nothing: it was "successful" at y = 0 (w = 0). The flat directions and the
     approach are probed apart. Minima found by hand: the cube falls to its bound -1."""
-    problem = Problem(model, [Variable(name, -1.0, 1.0, start=value) for name, value in start.items()],
-                      targets=targets, objective=Objective("f", "min"))
+    problem = Problem(
+        model,
+        [Variable(name, -1.0, 1.0, start=value) for name, value in start.items()],
+        targets=targets,
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful"
     for name, value in expected.items():
@@ -533,8 +600,12 @@ def test_a_constrained_saddle_is_left_along_a_curved_target(sense):
     circle, so that the merit rises whatever the objective gains; the escape follows the
     circle to second order. Answer: (1, 1) ((-1, -1)), x + y = +-2."""
     side = 1.0 if sense == "max" else -1.0
-    problem = Problem(sum_on_circle, [Variable("x", -3.0, 3.0), Variable("y", -3.0, 3.0)],
-                      targets=[Target("radius2", 2.0)], objective=Objective("sum", sense))
+    problem = Problem(
+        sum_on_circle,
+        [Variable("x", -3.0, 3.0), Variable("y", -3.0, 3.0)],
+        targets=[Target("radius2", 2.0)],
+        objective=Objective("sum", sense),
+    )
     result = solve(problem, start={"x": -side, "y": -side})
     assert result.status == "successful"
     assert result.parameters["x"] == pytest.approx(side, abs=1e-9)
@@ -549,8 +620,11 @@ def flat_valley(v):
 def test_a_line_of_minima_is_accepted_after_its_probe():
     """minimise (x + y - 1)^2 on [-2, 2]^2: every point of x + y = 1 is a minimum, with zero
     curvature along the line; the probe along it finds no lower value and the point stands."""
-    problem = Problem(flat_valley, [Variable("x", -2.0, 2.0, start=0.0), Variable("y", -2.0, 2.0, start=0.0)],
-                      objective=Objective("f", "min"))
+    problem = Problem(
+        flat_valley,
+        [Variable("x", -2.0, 2.0, start=0.0), Variable("y", -2.0, 2.0, start=0.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful"
     assert result.parameters["x"] + result.parameters["y"] == pytest.approx(1.0, abs=1e-12)
@@ -575,9 +649,14 @@ def test_a_point_that_breaks_a_target_has_no_derivatives():
     at x = 0 (least violation), reports no derivatives of an optimum there is not (NaN); the
     polished point's implicit derivative used to come out as a plain number (-3.9e-21).
     The same target at 2 is met, and its derivative is the closed form -1 / (2 sqrt(1))."""
+
     def problem(value):
-        return Problem(lambda v: {"q": v["x"] ** 2 + 1.0, "f": v["x"]}, [Variable("x", -2.0, 2.0)],
-                       targets=[Target("q", value, scale=1.0)], objective=Objective("f", "min"))
+        return Problem(
+            lambda v: {"q": v["x"] ** 2 + 1.0, "f": v["x"]},
+            [Variable("x", -2.0, 2.0)],
+            targets=[Target("q", value, scale=1.0)],
+            objective=Objective("f", "min"),
+        )
 
     broken = solve(problem(0.5))
     assert broken.status == "infeasible_target"
@@ -591,9 +670,11 @@ def test_a_point_that_breaks_a_target_has_no_derivatives():
 def test_nonlinear_equations_from_a_far_start():
     """Targets only, two equations in two unknowns with one root: 10 (y - x^2) = 0 and
     1 - x = 0 (Rosenbrock's), from (-1.2, 1): solved at (1, 1)."""
-    problem = Problem(lambda v: {"a": 10.0 * (v["y"] - v["x"] ** 2), "b": 1.0 - v["x"]},
-                      [Variable("x", -3.0, 3.0, start=-1.2), Variable("y", -3.0, 3.0, start=1.0)],
-                      targets=[Target("a", 0.0, scale=1.0), Target("b", 0.0, scale=1.0)])
+    problem = Problem(
+        lambda v: {"a": 10.0 * (v["y"] - v["x"] ** 2), "b": 1.0 - v["x"]},
+        [Variable("x", -3.0, 3.0, start=-1.2), Variable("y", -3.0, 3.0, start=1.0)],
+        targets=[Target("a", 0.0, scale=1.0), Target("b", 0.0, scale=1.0)],
+    )
     result = solve(problem)
     assert result.status == "successful"
     assert result.parameters["x"] == pytest.approx(1.0, abs=1e-10)
@@ -609,8 +690,11 @@ def circle_problem(radius2, x_min):
     free optimum the target alone is active (x = -sqrt(r2 / 5)); with it above, the limit
     too (x = x_min, y = -sqrt(r2 - x_min^2))."""
     return Problem(
-        circle_model, [Variable("x", -3.0, 3.0, start=-0.5), Variable("y", -3.0, 3.0, start=-0.5)],
-        targets=[Target("r2", radius2)], limits=[Limit("x", lower=x_min, scale=1.0)], objective=Objective("f", "min"),
+        circle_model,
+        [Variable("x", -3.0, 3.0, start=-0.5), Variable("y", -3.0, 3.0, start=-0.5)],
+        targets=[Target("r2", radius2)],
+        limits=[Limit("x", lower=x_min, scale=1.0)],
+        objective=Objective("f", "min"),
     )
 
 
@@ -648,16 +732,23 @@ def test_derivatives_with_only_the_target_active():
 def test_a_derivative_that_does_not_exist_is_not_reported_as_zero():
     """y = x + sqrt(p) = 1 with p fixed at 0: x* = 1 - sqrt(p), whose derivative in p is
     infinite there. The solve succeeds (x* = 1); the derivative must not read as 0."""
-    problem = Problem(lambda v: {"y": v["x"] + jnp.sqrt(v["p"])}, [Variable("x", 0.0, 2.0, start=0.5)],
-                      targets=[Target("y", 1.0)], fixed={"p": 0.0})
+    problem = Problem(
+        lambda v: {"y": v["x"] + jnp.sqrt(v["p"])},
+        [Variable("x", 0.0, 2.0, start=0.5)],
+        targets=[Target("y", 1.0)],
+        fixed={"p": 0.0},
+    )
     result = solve(problem)
     assert result.status == "successful"
     assert result.parameters["x"] == pytest.approx(1.0, rel=1e-12)
     assert not np.isfinite(result.derivatives["p"]["x"])
 
 
-@pytest.mark.parametrize("limits", [[Limit("g", lower=1.0, upper=1.0)], [Limit("g", upper=1.0), Limit("k", upper=1.0)]],
-                         ids=["pinned", "given-twice"])
+@pytest.mark.parametrize(
+    "limits",
+    [[Limit("g", lower=1.0, upper=1.0)], [Limit("g", upper=1.0), Limit("k", upper=1.0)]],
+    ids=["pinned", "given-twice"],
+)
 def test_derivatives_in_a_bound_of_dependent_rows_do_not_exist(limits):
     """min (x - 2)^2 + (y - 1)^2 under x + y <= u, u = 1: the projection of (2, 1) onto the
     line, x = (u + 1) / 2, y = (u - 1) / 2, so d(x, y)/du = (1/2, 1/2) with the limit given
@@ -666,6 +757,7 @@ def test_derivatives_in_a_bound_of_dependent_rows_do_not_exist(limits):
     of the pinned limit moves the optimum by u / 2, lowering it leaves no design; raising
     one of the twins moves nothing, lowering it moves by u / 2). The least-squares answer
     split it, 0.25 per side: NaN now, at the same optimum."""
+
     def model(v):
         return {"g": v["x"] + v["y"], "k": v["x"] + v["y"], "h": (v["x"] - 2) ** 2 + (v["y"] - 1) ** 2}
 
@@ -684,8 +776,11 @@ def test_derivatives_in_a_bound_of_dependent_rows_do_not_exist(limits):
 def test_feasibility_problem_with_a_curve_of_solutions():
     """Targets only, one equation in two unknowns: any point of the circle is a solution;
     the answer is on it, and its derivative is the minimum-norm one (along the normal)."""
-    problem = Problem(lambda v: {"r2": v["x"] ** 2 + v["y"] ** 2},
-                      [Variable("x", 0.0, 3.0, start=1.0), Variable("y", 0.0, 3.0, start=0.5)], targets=[Target("r2", 2.0)])
+    problem = Problem(
+        lambda v: {"r2": v["x"] ** 2 + v["y"] ** 2},
+        [Variable("x", 0.0, 3.0, start=1.0), Variable("y", 0.0, 3.0, start=0.5)],
+        targets=[Target("r2", 2.0)],
+    )
     result = solve(problem)
     assert result.status == "successful"
     x, y = result.parameters["x"], result.parameters["y"]
@@ -697,8 +792,11 @@ def test_feasibility_problem_with_a_curve_of_solutions():
 
 
 def test_objective_without_constraints_m_zero():
-    problem = Problem(lambda v: {"f": (v["x"] - 0.3) ** 2 + jnp.cos(v["x"])}, [Variable("x", -1.0, 1.0)],
-                      objective=Objective("f", "min"))
+    problem = Problem(
+        lambda v: {"f": (v["x"] - 0.3) ** 2 + jnp.cos(v["x"])},
+        [Variable("x", -1.0, 1.0)],
+        objective=Objective("f", "min"),
+    )
     result = solve(problem)
     assert result.status == "successful"
     # stationary: 2 (x - 0.3) = sin x
@@ -711,14 +809,18 @@ def test_default_design_with_the_remanence_free(tmp_path):
     phase used to run into a corner and end "infeasible_target"). With the compliance
     target met (0.32 mm/N, 5 N: the magnet comes 1.6 mm closer), the limit 4.8 mT at the
     closest gap is active, and the sensitivity grows as Br falls: Br on its lower bound,
-    the closest gap where seed 001 Eq. 1 (written here) gives 4.8 mT at Br = 0.5 T."""
+    the closest gap where the dome-Hall paper's Eq. 1 (written here) gives 4.8 mT at Br = 0.5 T."""
     from scipy.optimize import brentq
 
     from magdesign.design.spec import load_spec, problem_from_spec
 
-    text = (EXAMPLES / "dome_hall.toml").read_text().replace(
-        "[design.variables]\n",
-        '[design.variables]\n"magnet.remanence" = { lower = "0.5 T", upper = "1.4 T", start = "1.17 T" }\n',
+    text = (
+        (EXAMPLES / "dome_hall.toml")
+        .read_text()
+        .replace(
+            "[design.variables]\n",
+            '[design.variables]\n"magnet.remanence" = { lower = "0.5 T", upper = "1.4 T", start = "1.17 T" }\n',
+        )
     )
     path = tmp_path / "dome_hall_free_remanence.toml"
     path.write_text(text)
@@ -762,8 +864,10 @@ def test_a_gently_concave_direction_beside_a_stiff_one_is_followed(case):
     variables = [Variable("x", 0.0, 10.0, start=case["x"])]
     if case["target"]:
         variables += [Variable("y", 0.0, 10.0, start=0.2), Variable("z", -1.0, 1.0, start=0.0)]
-        model = lambda v: {"f": b * (v["x"] - v["y"]) ** 2 - a * (v["x"] + v["y"]) ** 2,  # noqa: E731
-                           "s": v["x"] - v["y"] + v["z"]}
+        model = lambda v: {
+            "f": b * (v["x"] - v["y"]) ** 2 - a * (v["x"] + v["y"]) ** 2,  # noqa: E731
+            "s": v["x"] - v["y"] + v["z"],
+        }
         expected = {"x": 10.0, "y": 10.0, "z": 0.1}
         targets = [Target("s", 0.1, scale=1.0)]
     else:

@@ -19,7 +19,7 @@ import pytest
 from magdesign.cli import main
 from magdesign.design import solve
 from magdesign.design.spec import default_spec
-from magdesign.design.tolerance import (monte_carlo, perturb, robust_solve, sigmas, tolerance_problem_from_spec)
+from magdesign.design.tolerance import monte_carlo, perturb, robust_solve, sigmas, tolerance_problem_from_spec
 from magdesign.scene import loads_from_spec, outputs, scene_from_spec, with_parameters
 from magdesign.units import SpecError
 
@@ -109,9 +109,12 @@ def test_effect_tolerances_move_the_scene_effects():
     listed = copy.deepcopy(spec)
     del listed["design"]
     listed["magnet"]["fidelity"] = "exact"
-    listed["scene"] = {"effects": ["temperature_drift", "placement", "chip_tilt", "saturation", "quantisation"],
-                       "placement": ["50 um", "-100 um", "200 um"], "tilt": ["2 deg", "-1 deg", "0.5 deg"],
-                       "temperature_change": "15 K"}
+    listed["scene"] = {
+        "effects": ["temperature_drift", "placement", "chip_tilt", "saturation", "quantisation"],
+        "placement": ["50 um", "-100 um", "200 um"],
+        "tilt": ["2 deg", "-1 deg", "0.5 deg"],
+        "temperature_change": "15 K",
+    }
     scene = with_parameters(scene_from_spec(listed), POINT)
     expected = outputs(scene, loads_from_spec(listed))
     for name in ("field_max", "field_rest", "sensitivity", "inplane_field_max", "compliance"):
@@ -133,7 +136,7 @@ def test_robust_design_holds_its_limits_at_k_sigma(gaussian_br, nominal):
     assert abs(after.yield_fraction - phi(2.0)) <= 4 * binomial_error(phi(2.0), SAMPLES)
 
 
-def write_spec(tmp_path, tolerances, target="\"0.32 mm/N\""):
+def write_spec(tmp_path, tolerances, target='"0.32 mm/N"'):
     text = importlib.resources.files("magdesign.design").joinpath("default.toml").read_text()
     text = text.replace('compliance = "0.32 mm/N"', f"compliance = {target}")
     path = tmp_path / "spec.toml"
@@ -149,7 +152,11 @@ def write_spec(tmp_path, tolerances, target="\"0.32 mm/N\""):
         ('placement = "3 T"', '"0.32 mm/N"', "design.tolerances.placement"),
         ('temperature = "5 %"', '"0.32 mm/N"', "design.tolerances.temperature"),
         ('distribution = "cauchy"\n"magnet.remanence" = "3 %"', '"0.32 mm/N"', "design.tolerances.distribution"),
-        ('"magnet.remanence" = "3 %"', '{ value = "0.32 mm/N", tolerance = "1 T" }', "design.targets.compliance.tolerance"),
+        (
+            '"magnet.remanence" = "3 %"',
+            '{ value = "0.32 mm/N", tolerance = "1 T" }',
+            "design.targets.compliance.tolerance",
+        ),
     ],
 )
 def test_bad_input_is_one_line_naming_the_key_exit_2(tmp_path, capsys, tolerances, target, key):
@@ -173,13 +180,18 @@ def test_missing_table_is_a_spec_error():
 def test_command_json_and_picture(tmp_path, capsys, nominal):
     spec = write_spec(tmp_path, '"magnet.remanence" = "3 %"', '{ value = "0.32 mm/N", tolerance = "5 %" }')
     picture = tmp_path / "tolerance.png"
-    code = main(["tolerance", spec, "--samples", "2000", "--json", "--robust", "2", "--seed", "5",
-                 "--plot", str(picture)])
+    code = main(
+        ["tolerance", spec, "--samples", "2000", "--json", "--robust", "2", "--seed", "5", "--plot", str(picture)]
+    )
     document = json.loads(capsys.readouterr().out)
     assert code == 0
     assert document["status"] == "successful" and 0 < document["yield"] < 1
-    assert document["tolerances"]["magnet.remanence"] == {"size": 0.03, "relative": True, "distribution": "normal",
-                                                          "written": "3 %"}
+    assert document["tolerances"]["magnet.remanence"] == {
+        "size": 0.03,
+        "relative": True,
+        "distribution": "normal",
+        "written": "3 %",
+    }
     carlo = document["design"]["monte_carlo"]
     assert carlo["samples"] == 2000 and carlo["seed"] == 5 and carlo["yield"] == document["yield"]
     field = carlo["outputs"]["field_max"]

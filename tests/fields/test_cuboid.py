@@ -31,9 +31,13 @@ def field(points, dimension=SIDES, polarization=J):
     points = np.asarray(points, dtype=float)
     flat = points.reshape(-1, 3)
     out = [
-        np.asarray(_field(np.resize(flat[k : k + N_POINTS], (N_POINTS, 3)), np.asarray(dimension, float), np.asarray(polarization, float)))[
-            : len(flat[k : k + N_POINTS])
-        ]
+        np.asarray(
+            _field(
+                np.resize(flat[k : k + N_POINTS], (N_POINTS, 3)),
+                np.asarray(dimension, float),
+                np.asarray(polarization, float),
+            )
+        )[: len(flat[k : k + N_POINTS])]
         for k in range(0, len(flat), N_POINTS)
     ]
     return np.concatenate(out).reshape(points.shape)
@@ -196,9 +200,9 @@ N_DERIVATIVE = 64  # derivative batches are padded to this: one compilation each
 @jax.jit
 def _jacobians(points, sides, polarization):
     """dB/dpoints, dB/ddimension, dB/dpolarization (forward mode), each (N, 3, 3)."""
-    return jax.vmap(jax.jacfwd(lambda p, d, j: cuboid(p, dimension=d, polarization=j), argnums=(0, 1, 2)), (0, None, None))(
-        points, sides, polarization
-    )
+    return jax.vmap(
+        jax.jacfwd(lambda p, d, j: cuboid(p, dimension=d, polarization=j), argnums=(0, 1, 2)), (0, None, None)
+    )(points, sides, polarization)
 
 
 @jax.jit
@@ -257,7 +261,9 @@ def _hard_points(sides):
     )
 
 
-@pytest.mark.parametrize("sides", [(2e-3, 3e-3, 1e-3), (1e-3, 1e-3, 1e-9), (1e-6, 1e-3, 1e-3), (1e-3, 1e-3, 1.0), (1e-6, 1e-6, 1e-3)])
+@pytest.mark.parametrize(
+    "sides", [(2e-3, 3e-3, 1e-3), (1e-3, 1e-3, 1e-9), (1e-6, 1e-3, 1e-3), (1e-3, 1e-3, 1.0), (1e-6, 1e-6, 1e-3)]
+)
 def test_no_nan_in_values_or_gradients(sides):
     """Faces, edges, corners, an edge's extension, 1e3 sizes away, flat (1e-6) and long
     (1e3) blocks: finite values and finite derivatives with respect to the points, the
@@ -298,7 +304,9 @@ def test_symmetry_and_scale():
     for scale in (1e-6, 1.0):
         np.testing.assert_allclose(field(unit * scale, shape * scale), reference, rtol=1e-12, atol=1e-15)
     mirror = np.array([1.0, -1.0, 1.0])
-    np.testing.assert_allclose(field(unit * mirror * 1e-3, SIDES, J * mirror), field(unit * 1e-3) * mirror, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(
+        field(unit * mirror * 1e-3, SIDES, J * mirror), field(unit * 1e-3) * mirror, rtol=1e-12, atol=1e-15
+    )
 
 
 def test_batched_dimensions_and_vmap():

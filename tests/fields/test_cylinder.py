@@ -36,7 +36,7 @@ def rel_err(a, b):
 
 
 def on_axis_reference(z, radius, height, remanence):
-    """Seed 001 Eq. 1 evaluated as written, in 60-digit decimal arithmetic."""
+    """The dome-Hall paper's Eq. 1 (on-axis field) evaluated as written, in 60-digit decimal arithmetic."""
     getcontext().prec = 60
     z, r, h = Decimal(z), Decimal(radius), Decimal(height)
     u = h + z
@@ -68,7 +68,9 @@ def test_equals_40_digit_references(aspect):
     )
     radius = 2.5e-3  # the references are in radii: any scale
     padded = np.resize(points, (REFERENCE_POINTS, 3))  # one shape: one compilation for every magnet
-    field = lambda polarization: np.asarray(_unit_magnet(padded * radius, radius, float(aspect), polarization))[: len(points)]  # noqa: E731
+    field = lambda polarization: np.asarray(_unit_magnet(padded * radius, radius, float(aspect), polarization))[
+        : len(points)
+    ]  # noqa: E731
     np.testing.assert_array_less(rel_err(field(1.0), along_z), 1e-12)  # scalar: polarized along +z
     np.testing.assert_array_less(rel_err(field(jnp.array([1.0, 0.0, 0.0])), along_x), 1e-12)
     mixed = 0.6 * along_x - 0.8 * along_z  # the field is linear in the polarization
@@ -81,8 +83,10 @@ def test_a_thin_disc_on_its_axis_keeps_its_digits():
     expected = float(reference["field"][2])
     value = cylinder(jnp.array([0.0, 0.0, 3.16e-3]), radius=1e-3, height=1e-9, polarization=1.0)[2]
     assert float(value) == pytest.approx(expected, rel=1e-12)
-    # and seed 001's closed form (its two terms evaluated without cancellation) agrees
-    assert float(cylinder_on_axis(3.16e-3 - 0.5e-9, radius=1e-3, height=1e-9, remanence=1.0)) == pytest.approx(expected, rel=1e-12)
+    # and the on-axis closed form (its two terms evaluated without cancellation) agrees
+    assert float(cylinder_on_axis(3.16e-3 - 0.5e-9, radius=1e-3, height=1e-9, remanence=1.0)) == pytest.approx(
+        expected, rel=1e-12
+    )
 
 
 @pytest.mark.parametrize(("radius", "height"), [(1.5e-3, 1e-3), (2e-3, 4e-3), (1e-3, 0.4e-3)])
@@ -119,7 +123,7 @@ def test_inside_the_magnet_agrees_with_magpylib():
     assert np.max(rel_err(field(points), magpylib_field(points))) < 1e-11
 
 
-def test_seed_001_saturation_distance():
+def test_dome_hall_saturation_distance():
     assert cylinder_on_axis(5.8458e-3, radius=1.5e-3, height=1e-3, remanence=1.17) == pytest.approx(4.800e-3, abs=5e-7)
 
 
@@ -164,7 +168,7 @@ def _divergence_and_curl(points, **params):
 @pytest.mark.parametrize("height", [D, 1e-6 * R, 1e3 * R])
 @pytest.mark.parametrize("polarization", [J, (0.4, -0.9, 0.7)])
 def test_divergence_and_curl_vanish_outside(height, polarization):
-    """By jax derivatives (the closed-form derivatives of the custom JVP), for a seed-001
+    """By jax derivatives (the closed-form derivatives of the custom JVP), for the dome-Hall
     magnet, a thin disc and a long rod, polarized along the axis or in any direction."""
     rng = np.random.default_rng(3)
     extent = max(4 * R, height)
@@ -205,7 +209,9 @@ def test_any_direction_turns_with_the_magnet():
     angle = 0.7
     rot = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]])
     b = field(p, polarization=jnp.asarray(polarization))
-    np.testing.assert_allclose(field(p @ rot.T, polarization=jnp.asarray(rot @ polarization)), b @ rot.T, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(
+        field(p @ rot.T, polarization=jnp.asarray(rot @ polarization)), b @ rot.T, rtol=1e-12, atol=1e-14
+    )
     mirrored = field(p * [1, 1, -1], polarization=jnp.asarray(polarization * [-1, -1, 1]))
     np.testing.assert_allclose(mirrored, b * [-1, -1, 1], rtol=1e-12, atol=1e-14)
 
@@ -214,7 +220,13 @@ def test_axis_fidelity_with_any_direction_is_exact_on_the_axis():
     z = np.concatenate([np.linspace(-0.45, 0.45, 7) * D, D / 2 + np.geomspace(1e-3, 1e2, 9) * R])
     points = np.stack([0 * z, 0 * z, z], -1)
     polarization = jnp.array([0.3, -0.6, 1.1])
-    np.testing.assert_allclose(field(points, polarization=polarization, fidelity="axis"), field(points, polarization=polarization), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(
+        field(points, polarization=polarization, fidelity="axis"),
+        field(points, polarization=polarization),
+        rtol=1e-12,
+        atol=1e-15,
+    )
+
 
 def test_far_field_tends_to_dipole():
     direction = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
@@ -312,7 +324,11 @@ def test_a_large_call_evaluates_each_point_in_its_own_zone(aspect, monkeypatch):
 
     @jax.jit
     def tangent(p, d):
-        return jax.jvp(lambda q, h: cylinder(q, radius=radius, height=h, polarization=polarization), (p, height), (d, 1e-3 * height))[1]
+        return jax.jvp(
+            lambda q, h: cylinder(q, radius=radius, height=h, polarization=polarization),
+            (p, height),
+            (d, 1e-3 * height),
+        )[1]
 
     for p in (points, with_axis, mostly_near):
         ours = np.asarray(jax.jit(value)(p))
@@ -329,7 +345,9 @@ def test_a_large_call_evaluates_each_point_in_its_own_zone(aspect, monkeypatch):
         rho = np.hypot(points[:, 0], points[:, 1])
         edge_distance = np.hypot(rho - radius, np.abs(points[:, 2]) - height / 2)
         kept = (rho > 0.1 * radius) & (edge_distance > 1e-6 * radius)
-        theirs = magpylib.magnet.Cylinder(polarization=np.asarray(polarization), dimension=(2 * radius, height)).getB(points[kept])
+        theirs = magpylib.magnet.Cylinder(polarization=np.asarray(polarization), dimension=(2 * radius, height)).getB(
+            points[kept]
+        )
         assert np.max(rel_err(np.asarray(jax.jit(value)(points))[kept], theirs)) < 1e-10
 
 
@@ -362,7 +380,9 @@ def test_on_axis_derivatives_equal_their_closed_forms():
     first = jax.vmap(jax.grad(bracket, argnums=(0, 1, 2)), in_axes=(0, None, None))(z, R, D)
     second = jax.vmap(jax.grad(jax.grad(bracket)), in_axes=(0, None, None))(z, R, D)
     for name, value in zip(("z", "radius", "height", "zz"), (*first, second)):
-        np.testing.assert_allclose(value, expected[name], rtol=1e-12, atol=1e-12 * np.max(np.abs(expected[name])), err_msg=name)
+        np.testing.assert_allclose(
+            value, expected[name], rtol=1e-12, atol=1e-12 * np.max(np.abs(expected[name])), err_msg=name
+        )
 
 
 def test_jit_vmap_grad_agree_with_plain_evaluation():
@@ -405,12 +425,16 @@ def _fourth_order_difference(f, x, step):
 def test_derivatives_match_finite_differences(aspect, polarization):
     """The closed-form derivatives (custom JVP) against 4th-order central differences of the
     values, with respect to the points (jacfwd and jacrev), the height, the radius and the
-    polarization, for a thin disc, the seed-001 shape and a long rod."""
+    polarization, for a thin disc, the dome-Hall magnet's shape and a long rod."""
     radius, height = 1.0, aspect
     polarization = jnp.asarray(polarization)
     rng = np.random.default_rng(8)
     points = [rng.uniform(-3, 3, 3) * max(1.0, height) for _ in range(4)]
-    points += [np.array([0.0, 0.0, height / 2 + 0.5]), np.array([1e-4, 0.0, height / 2 + 0.3]), np.array([1.5, 0.2, 0.1 * height])]
+    points += [
+        np.array([0.0, 0.0, height / 2 + 0.5]),
+        np.array([1e-4, 0.0, height / 2 + 0.3]),
+        np.array([1.5, 0.2, 0.1 * height]),
+    ]
 
     def f(p, r=radius, h=height, j=polarization):
         return cylinder(p, radius=r, height=h, polarization=j)
@@ -428,7 +452,9 @@ def test_derivatives_match_finite_differences(aspect, polarization):
         scale = np.max(np.abs(np.asarray(value(point))))
         numeric = _fourth_order_difference(lambda r: np.asarray(f(point, r=r[0])), np.array([radius]), 1e-4)[..., 0]
         assert np.max(np.abs(d_radius - numeric)) < 1e-8 * scale, point
-        numeric = _fourth_order_difference(lambda h: np.asarray(f(point, h=h[0])), np.array([height]), 1e-4 * min(height, radius))[..., 0]
+        numeric = _fourth_order_difference(
+            lambda h: np.asarray(f(point, h=h[0])), np.array([height]), 1e-4 * min(height, radius)
+        )[..., 0]
         assert np.max(np.abs(d_height - numeric)) < 1e-8 * scale / height, point
         if np.ndim(polarization):  # linear in the polarization: the derivative is the unit fields
             unit = np.stack([np.asarray(f(point, j=jnp.eye(3)[k])) for k in range(3)], -1)
@@ -450,13 +476,15 @@ def test_second_derivatives_on_and_near_the_axis_are_finite_and_agree():
 
 def test_on_axis_gradients_match_finite_differences():
     g = jax.grad(lambda r, h, z: cylinder_on_axis(z, radius=r, height=h, remanence=J), argnums=(0, 1, 2))(R, D, 2e-3)
-    for i, base in enumerate((R, D, 2e-3)):
+    for i in range(3):
         step = 1e-8
         args = [R, D, 2e-3]
         up, down = list(args), list(args)
         up[i] += step
         down[i] -= step
-        fd = (on_axis_reference(down[2] * 0 + up[2], up[0], up[1], J) - on_axis_reference(down[2], down[0], down[1], J)) / (2 * step)
+        fd = (
+            on_axis_reference(down[2] * 0 + up[2], up[0], up[1], J) - on_axis_reference(down[2], down[0], down[1], J)
+        ) / (2 * step)
         assert float(g[i]) == pytest.approx(fd, rel=1e-6)
 
 

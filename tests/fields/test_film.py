@@ -1,4 +1,4 @@
-"""The sinusoidal film of seed 004 (PHYSICS.md 1.2), against an independent integration
+"""The sinusoidal film of Yan et al. (2021), against an independent integration
 of its magnetic charges.
 
 The references integrate, with scipy, the film's charges in 2-D (infinite along y): for
@@ -45,9 +45,10 @@ def _charge_field(x, z, kernel, left, right, sides):
             return _quad(integrand, a, b)
 
     def _quad(integrand, a, b):
-        return integrate.quad(lambda t: integrand(t).real, a, b, **QUAD)[0] + 1j * integrate.quad(
-            lambda t: integrand(t).imag, a, b, **QUAD
-        )[0]
+        return (
+            integrate.quad(lambda t: integrand(t).real, a, b, **QUAD)[0]
+            + 1j * integrate.quad(lambda t: integrand(t).imag, a, b, **QUAD)[0]
+        )
 
     def volume_column(xp):  # the volume charge of the column at x', integrated over depth
         return J0 * K * np.cos(K * xp) * part(lambda zp: kernel(w, xp + 1j * zp), -THICKNESS, 0.0)
@@ -79,7 +80,8 @@ def test_finite_film_equals_its_integrated_charges(x, z, periods):
 
 
 def test_a_film_a_few_periods_wide_is_stronger_than_an_infinite_one():
-    """PHYSICS.md 1.2: 1.76x (one period wide) and 1.09x (three) at 3.5 mm depth; wide -> infinite."""
+    """1.76x (one period wide) and 1.09x (three) at 3.5 mm depth, as an outside integration of
+    the strip's charges gives; wide -> infinite."""
     infinite = float(film_magnitude(3.5e-3, **PARAMS))
     ratios = [float(jnp.linalg.norm(jnp.stack(film(0.0, 3.5e-3, **PARAMS, periods=n)))) / infinite for n in (1, 3, 40)]
     assert ratios[0] == pytest.approx(1.764, abs=1e-3)
@@ -110,7 +112,7 @@ def test_published_attenuation_depths(z_mm, attenuation):
 def test_magnitude_from_the_bottom_face_and_thin_film():
     expected = J0 * (1 - np.exp(-K * THICKNESS)) * np.exp(-K * 2e-3)
     assert float(film_magnitude(2e-3, **PARAMS)) == pytest.approx(expected, rel=1e-14)
-    # seed 004's printed Eq. 1 is e^{kd} larger: it measures z from the top face
+    # Yan et al.'s printed Eq. 1 is e^{kd} larger: it measures z from the top face
     assert float(film_magnitude(2e-3 - THICKNESS, **PARAMS)) == pytest.approx(
         J0 * (np.exp(K * THICKNESS) - 1) * np.exp(-K * 2e-3), rel=1e-14
     )

@@ -63,7 +63,15 @@ def test_cylinder_demagnetizing_factors_against_the_closed_form(case):
     exact = float(case["N_z"])
     diameter = 1e-3
     errors = [
-        abs(float(demagnetizing(soft.soft_body("cylinder", [diameter, case["gamma"] * diameter], cells=n, permeability=2.0))[2, 2]) / exact - 1)
+        abs(
+            float(
+                demagnetizing(
+                    soft.soft_body("cylinder", [diameter, case["gamma"] * diameter], cells=n, permeability=2.0)
+                )[2, 2]
+            )
+            / exact
+            - 1
+        )
         for n in (8, 16)
     ]
     assert errors[1] < 6e-3
@@ -98,8 +106,11 @@ def _force(body, position):
     return jax.grad(lambda p: soft.coenergy(body, _sphere_beside_dipole(body, p)))(position)
 
 
-@pytest.mark.parametrize("case", [c for c in REFERENCES["sphere_dipole"]["cases"] if c["d_over_a"] == 2.0],
-                         ids=lambda c: f"mu{c['mu_r']:g}-d{c['d_over_a']:g}")
+@pytest.mark.parametrize(
+    "case",
+    [c for c in REFERENCES["sphere_dipole"]["cases"] if c["d_over_a"] == 2.0],
+    ids=lambda c: f"mu{c['mu_r']:g}-d{c['d_over_a']:g}",
+)
 def test_force_on_a_soft_sphere_beside_a_dipole(case):
     """The co-energy's gradient against the exact multipole series, on the dipole's axis and
     in its equatorial plane, centre two radii from the dipole. Measured at 12 cells: within
@@ -116,8 +127,9 @@ def test_force_on_a_soft_sphere_beside_a_dipole(case):
         assert np.all(np.abs(np.delete(force, axis)) < 1e-9 * abs(force[axis]))
 
 
-@pytest.mark.parametrize("case", [c for c in REFERENCES["sphere_dipole"]["cases"] if c["d_over_a"] == 2.0],
-                         ids=lambda c: f"mu{c['mu_r']:g}")
+@pytest.mark.parametrize(
+    "case", [c for c in REFERENCES["sphere_dipole"]["cases"] if c["d_over_a"] == 2.0], ids=lambda c: f"mu{c['mu_r']:g}"
+)
 def test_induced_field_of_a_soft_sphere_beside_a_dipole(case):
     """The sphere's own field beyond it on the axis and beside it, against the series."""
     tolerance = 2e-2 if case["mu_r"] < 10 else 0.12
@@ -150,15 +162,21 @@ def test_a_cube_turned_by_90_degrees_answers_the_same():
     np.testing.assert_allclose(along_x[:, 0].mean(), along_z[:, 2].mean(), rtol=1e-12)
 
 
-@pytest.mark.parametrize("call, match", [
-    (lambda: soft.soft_body("torus", 1e-3, cells=4, permeability=2.0), "shape"),
-    (lambda: soft.soft_body("cylinder", 1e-3, cells=4, permeability=2.0), "size"),
-    (lambda: soft.soft_body("sphere", -1e-3, cells=4, permeability=2.0), "size"),
-    (lambda: soft.soft_body("sphere", 1e-3, cells=0, permeability=2.0), "cells"),
-    (lambda: soft.soft_body("cuboid", [1e-3] * 3, cells=20, permeability=2.0), "cells"),
-    (lambda: soft.soft_body("sphere", 1e-3, cells=4, permeability=0.0), "permeability"),
-    (lambda: soft.magnetization(soft.soft_body("sphere", 1e-3, cells=4, permeability=2.0), np.zeros((3, 3))), "external"),
-])
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda: soft.soft_body("torus", 1e-3, cells=4, permeability=2.0), "shape"),
+        (lambda: soft.soft_body("cylinder", 1e-3, cells=4, permeability=2.0), "size"),
+        (lambda: soft.soft_body("sphere", -1e-3, cells=4, permeability=2.0), "size"),
+        (lambda: soft.soft_body("sphere", 1e-3, cells=0, permeability=2.0), "cells"),
+        (lambda: soft.soft_body("cuboid", [1e-3] * 3, cells=20, permeability=2.0), "cells"),
+        (lambda: soft.soft_body("sphere", 1e-3, cells=4, permeability=0.0), "permeability"),
+        (
+            lambda: soft.magnetization(soft.soft_body("sphere", 1e-3, cells=4, permeability=2.0), np.zeros((3, 3))),
+            "external",
+        ),
+    ],
+)
 def test_bad_input_is_a_clear_error(call, match):
     with pytest.raises(ValueError, match=match):
         call()

@@ -26,11 +26,14 @@ def _uniform(body, field):
     return jnp.broadcast_to(jnp.asarray(field, dtype=float), (len(body.index), 3))
 
 
-@pytest.mark.parametrize("mu_r, saturation, applied, tolerance", [
-    (300.0, 2.2, 1.0, 1.2e-2),  # Fe, deep saturation
-    (1000.0, 0.8, 0.5, 6e-3),   # Ni-Fe, saturated
-    (2.0, 1.0, 2.0, 5e-4),      # weakly permeable, on the knee
-])
+@pytest.mark.parametrize(
+    "mu_r, saturation, applied, tolerance",
+    [
+        (300.0, 2.2, 1.0, 1.2e-2),  # Fe, deep saturation
+        (1000.0, 0.8, 0.5, 6e-3),  # Ni-Fe, saturated
+        (2.0, 1.0, 2.0, 5e-4),  # weakly permeable, on the knee
+    ],
+)
 def test_a_saturating_sphere_in_a_uniform_field(mu_r, saturation, applied, tolerance):
     """Against the scalar equation of the uniformly magnetised sphere. Measured at 8 cells:
     -0.79 %, -0.40 %, -0.016 % (the staircase sphere's error; where the body is saturated
@@ -78,8 +81,10 @@ def test_the_coenergy_gradient_is_the_force_on_the_frozen_magnetisation():
     step = 1e-6
     for axis in (0, 2):
         shift = jnp.zeros(3).at[axis].set(step)
-        difference = (soft.coenergy(body, _external(body, position + shift))
-                      - soft.coenergy(body, _external(body, position - shift))) / (2 * step)
+        difference = (
+            soft.coenergy(body, _external(body, position + shift))
+            - soft.coenergy(body, _external(body, position - shift))
+        ) / (2 * step)
         assert abs(difference / gradient[axis] - 1) < 1e-5
 
 
@@ -88,7 +93,9 @@ def test_a_solve_that_cannot_converge_says_so(monkeypatch):
     return the last iterate."""
     monkeypatch.setattr(soft, "SATURATION_MAX_STEPS", 1)
     body = soft.soft_body("sphere", 2e-3, cells=4, permeability=300.0, saturation=2.2)
-    with pytest.raises(Exception, match="saturation: the solve of the cells' magnetisation did not converge in 1 steps"):
+    with pytest.raises(
+        Exception, match="saturation: the solve of the cells' magnetisation did not converge in 1 steps"
+    ):
         jax.block_until_ready(soft.magnetization(body, _uniform(body, [0.0, 0.0, 1.0])))
 
 
@@ -117,8 +124,10 @@ def test_one_prism_is_two_cubes_side_by_side(turn, saturation):
     parts = soft.coupled_magnetization(bodies, centres, matrices, externals)
     points = jnp.array([[0.0, 0.0, 1.2e-3], [1.6e-3, -0.3e-3, 0.2e-3], [-0.4e-3, 1.1e-3, -0.6e-3]])
     expected = np.asarray(soft.field(prism, whole, points))
-    got = sum(np.asarray(soft.field(b, part, (points - c) @ m.T) @ m)
-              for b, part, c, m in zip(bodies, parts, centres, matrices))
+    got = sum(
+        np.asarray(soft.field(b, part, (points - c) @ m.T) @ m)
+        for b, part, c, m in zip(bodies, parts, centres, matrices)
+    )
     np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
 
 
@@ -130,8 +139,10 @@ def test_two_far_spheres_magnetise_one_another_as_two_dipoles():
     beta = 3 chi / (3 + chi). Each one's rise over it alone, measured at 8 and 6 cells:
     within 1 % of the pair's (the dipole model leaves out the induced higher multipoles)."""
     radii, chis, distance, applied = (1e-3, 0.75e-3), (1.0, 2.0), 4e-3, 1e-2
-    spheres = [soft.soft_body("sphere", 2 * radii[0], cells=8, permeability=1.0 + chis[0]),
-               soft.soft_body("sphere", 2 * radii[1], cells=6, permeability=1.0 + chis[1], saturation=50.0)]
+    spheres = [
+        soft.soft_body("sphere", 2 * radii[0], cells=8, permeability=1.0 + chis[0]),
+        soft.soft_body("sphere", 2 * radii[1], cells=6, permeability=1.0 + chis[1], saturation=50.0),
+    ]
     centres = [jnp.zeros(3), jnp.array([0.0, 0.0, distance])]
     uniform = [_uniform(sphere, [0.0, 0.0, applied]) for sphere in spheres]
     both = soft.coupled_magnetization(spheres, centres, [jnp.eye(3)] * 2, uniform)
@@ -139,7 +150,9 @@ def test_two_far_spheres_magnetise_one_another_as_two_dipoles():
     rises = [float(m[:, 2].mean()) / a - 1 for m, a in zip(both, alone)]
     beta = [3 * c / (3 + c) for c in chis]
     coupling = [2 / 3 * (radii[1] / distance) ** 3, 2 / 3 * (radii[0] / distance) ** 3]  # on 1 from 2, on 2 from 1
-    pair = np.linalg.solve([[1.0, -beta[0] * coupling[0]], [-beta[1] * coupling[1], 1.0]], [beta[0] * applied, beta[1] * applied])
+    pair = np.linalg.solve(
+        [[1.0, -beta[0] * coupling[0]], [-beta[1] * coupling[1], 1.0]], [beta[0] * applied, beta[1] * applied]
+    )
     expected = [pair[i] / (beta[i] * applied) - 1 for i in range(2)]
     for rise, want in zip(rises, expected):
         assert abs(rise / want - 1) < 1e-2, (rises, expected)

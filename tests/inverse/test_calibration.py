@@ -1,4 +1,4 @@
-"""Calibration: a seed-001 dome + Hall scene's Br and c10 recovered from synthetic data."""
+"""Calibration: a dome-Hall scene's Br and c10 recovered from synthetic data."""
 
 import dataclasses
 import pathlib

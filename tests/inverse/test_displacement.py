@@ -1,4 +1,4 @@
-"""Seed 003: the four GMR readings back to the magnet's 3-D displacement."""
+"""The GMR-inductor sensor: the four GMR readings back to the magnet's 3-D displacement."""
 
 import pathlib
 import tomllib

@@ -23,6 +23,7 @@ Method
   Contact radius = midpoint between the current radial positions of the outermost
   node in contact and the next (free) outer node, i.e. resolved to +- half a node spacing.
 """
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -42,11 +43,11 @@ def _q8(xi, eta):
             dN[a, 0] = 0.25 * xa * (1 + ea * eta) * (2 * xa * xi + ea * eta)
             dN[a, 1] = 0.25 * ea * (1 + xa * xi) * (xa * xi + 2 * ea * eta)
         elif xa == 0:
-            N[a] = 0.5 * (1 - xi ** 2) * (1 + ea * eta)
-            dN[a] = [-xi * (1 + ea * eta), 0.5 * ea * (1 - xi ** 2)]
+            N[a] = 0.5 * (1 - xi**2) * (1 + ea * eta)
+            dN[a] = [-xi * (1 + ea * eta), 0.5 * ea * (1 - xi**2)]
         else:
-            N[a] = 0.5 * (1 + xa * xi) * (1 - eta ** 2)
-            dN[a] = [0.5 * xa * (1 - eta ** 2), -eta * (1 + xa * xi)]
+            N[a] = 0.5 * (1 + xa * xi) * (1 - eta**2)
+            dN[a] = [0.5 * xa * (1 - eta**2), -eta * (1 + xa * xi)]
     return N, dN
 
 
@@ -61,8 +62,12 @@ def dome_mesh(outer_radius, thickness, n_wall, n_meridian, grading=1.0, wall_gra
     Ro, Ri = outer_radius, outer_radius - thickness
     pc = 0.5 * np.pi * (np.arange(n_meridian + 1) / n_meridian) ** grading
     rc = Ro - thickness * (1 - np.arange(n_wall + 1) / n_wall) ** wall_grading
-    phi = np.empty(2 * n_meridian + 1); phi[::2] = pc; phi[1::2] = 0.5 * (pc[1:] + pc[:-1])
-    r = np.empty(2 * n_wall + 1); r[::2] = rc; r[1::2] = 0.5 * (rc[1:] + rc[:-1])
+    phi = np.empty(2 * n_meridian + 1)
+    phi[::2] = pc
+    phi[1::2] = 0.5 * (pc[1:] + pc[:-1])
+    r = np.empty(2 * n_wall + 1)
+    r[::2] = rc
+    r[1::2] = 0.5 * (rc[1:] + rc[:-1])
     r[0] = Ri
     P, R = np.meshgrid(phi, r, indexing="ij")
     used = ~((np.arange(phi.size)[:, None] % 2 == 1) & (np.arange(r.size)[None, :] % 2 == 1))
@@ -80,16 +85,15 @@ def stiffness(xy, elems, youngs_modulus, poisson_ratio):
     """Global axisymmetric stiffness (N/m), dofs interleaved (u_rho, u_z) per node."""
     E, nu = youngs_modulus, poisson_ratio
     c = E / ((1 + nu) * (1 - 2 * nu))
-    D = c * np.array([[1 - nu, nu, nu, 0], [nu, 1 - nu, nu, 0], [nu, nu, 1 - nu, 0],
-                      [0, 0, 0, 0.5 - nu]])
-    X = xy[elems]                                   # (ne, 8, 2)
+    D = c * np.array([[1 - nu, nu, nu, 0], [nu, 1 - nu, nu, 0], [nu, nu, 1 - nu, 0], [0, 0, 0, 0.5 - nu]])
+    X = xy[elems]  # (ne, 8, 2)
     ne = len(elems)
     Ke = np.zeros((ne, 16, 16))
     for (xi, eta), w in zip(_GP, _GW):
         N, dN = _q8(xi, eta)
-        J = np.einsum("ai,eaj->eij", dN, X)         # J[e, i, j] = d x_j / d xi_i
+        J = np.einsum("ai,eaj->eij", dN, X)  # J[e, i, j] = d x_j / d xi_i
         det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
-        dNx = np.linalg.solve(J, np.broadcast_to(dN.T, (ne, 2, 8)))   # (ne, 2, 8)
+        dNx = np.linalg.solve(J, np.broadcast_to(dN.T, (ne, 2, 8)))  # (ne, 2, 8)
         rho = X[:, :, 0] @ N
         B = np.zeros((ne, 4, 16))
         B[:, 0, 0::2] = dNx[:, 0]
@@ -144,9 +148,18 @@ def contact_lcp(C, h, max_iter=200):
     raise RuntimeError("contact active set did not converge")
 
 
-def linear_dome_force(outer_radius, thickness, youngs_modulus, poisson_ratio, travel,
-                      n_wall=8, n_meridian=80, grading=2.5, wall_grading=1.5,
-                      return_details=False):
+def linear_dome_force(
+    outer_radius,
+    thickness,
+    youngs_modulus,
+    poisson_ratio,
+    travel,
+    n_wall=8,
+    n_meridian=80,
+    grading=2.5,
+    wall_grading=1.5,
+    return_details=False,
+):
     """Plate force F (N) and contact radius (m) for plate travel ``travel`` (m).
 
     Mesh: n_wall x n_meridian Q8 elements, see ``dome_mesh``.  The default (8, 80, 2.5, 1.5)
@@ -166,43 +179,58 @@ def linear_dome_force(outer_radius, thickness, youngs_modulus, poisson_ratio, tr
     K = stiffness(xy, elems, youngs_modulus, poisson_ratio)
     n = K.shape[0]
     free = np.setdiff1d(np.arange(n), _base_dofs(grid))
-    outer = grid[:-1, -1]                            # outer-surface nodes above the clamp
-    h_all = Ro - d - xy[outer, 1]                    # initial gaps (m)
+    outer = grid[:-1, -1]  # outer-surface nodes above the clamp
+    h_all = Ro - d - xy[outer, 1]  # initial gaps (m)
     lu = spla.splu(K[free][:, free].tocsc())
-    reach = 2.0                                      # candidates: initial gap < reach * d
+    reach = 2.0  # candidates: initial gap < reach * d
     while True:
         cand = outer[h_all < reach * d]
         pos = np.searchsorted(free, 2 * cand + 1)
-        X = np.empty((free.size, cand.size))         # displacements per unit upward force
-        for j, q in enumerate(pos):                  # (column-wise: fast in SuperLU)
-            e = np.zeros(free.size); e[q] = 1.0
+        X = np.empty((free.size, cand.size))  # displacements per unit upward force
+        for j, q in enumerate(pos):  # (column-wise: fast in SuperLU)
+            e = np.zeros(free.size)
+            e[q] = 1.0
             X[:, j] = lu.solve(e)
-        p, _, iters = contact_lcp(X[pos], h_all[h_all < reach * d])   # downward forces (N)
+        p, _, iters = contact_lcp(X[pos], h_all[h_all < reach * d])  # downward forces (N)
         u = np.zeros(n)
         u[free] = -X @ p
         gap = h_all - u[2 * outer + 1]
-        if gap.min() >= -1e-9 * d:                   # no penetration outside candidates
+        if gap.min() >= -1e-9 * d:  # no penetration outside candidates
             break
         reach *= 4.0
     force = p.sum()
-    k = np.nonzero(p > 0)[0].max()                  # outermost node in contact
-    rho = xy[cand[k:k + 2], 0] + u[2 * cand[k:k + 2]]
-    a = rho.mean()                                   # midway to the first free node
+    k = np.nonzero(p > 0)[0].max()  # outermost node in contact
+    rho = xy[cand[k : k + 2], 0] + u[2 * cand[k : k + 2]]
+    a = rho.mean()  # midway to the first free node
     if not return_details:
         return force, a
     base = grid[-1][grid[-1] >= 0]
-    return force, a, dict(u=u, xy=xy, p=p, gap=gap, contact_nodes=cand, iterations=iters,
-                          a_bracket=rho, base_reaction=(K @ u)[2 * base + 1].sum(), n_dof=n)
+    return (
+        force,
+        a,
+        dict(
+            u=u,
+            xy=xy,
+            p=p,
+            gap=gap,
+            contact_nodes=cand,
+            iterations=iters,
+            a_bracket=rho,
+            base_reaction=(K @ u)[2 * base + 1].sum(),
+            n_dof=n,
+        ),
+    )
 
 
 def reissner_compliance(outer_radius, thickness, youngs_modulus, poisson_ratio):
     """Reissner thin-shell point-load compliance (m/N), R = mid-surface radius."""
     R, t, nu = outer_radius - thickness / 2, thickness, poisson_ratio
-    return R * np.sqrt(3 * (1 - nu ** 2)) / (4 * youngs_modulus * t ** 2)
+    return R * np.sqrt(3 * (1 - nu**2)) / (4 * youngs_modulus * t**2)
 
 
-def lame_sphere_check(outer_radius, thickness, youngs_modulus, poisson_ratio, pressure,
-                      n_wall=4, n_meridian=16, grading=1.0):
+def lame_sphere_check(
+    outer_radius, thickness, youngs_modulus, poisson_ratio, pressure, n_wall=4, n_meridian=16, grading=1.0
+):
     """Validation: thick hollow sphere under internal pressure (Pa), same mesh/element code.
 
     Hemisphere with symmetry BCs (u_z = 0 on z = 0, u_rho = 0 on the axis); consistent
@@ -216,21 +244,20 @@ def lame_sphere_check(outer_radius, thickness, youngs_modulus, poisson_ratio, pr
     f = np.zeros(K.shape[0])
     inner = grid[:, 0]
     for k in range(0, len(inner) - 2, 2):
-        ids = inner[k:k + 3]
+        ids = inner[k : k + 3]
         X = xy[ids]
         for s, w in zip(_G1, _W1):
-            N = np.array([0.5 * s * (s - 1), 1 - s ** 2, 0.5 * s * (s + 1)])
+            N = np.array([0.5 * s * (s - 1), 1 - s**2, 0.5 * s * (s + 1)])
             dN = np.array([s - 0.5, -2 * s, s + 0.5])
             x, tg = N @ X, dN @ X
-            nvec = np.array([tg[1], -tg[0]])         # |nvec| = ds/dxi
-            nvec *= np.sign(nvec @ x)                 # traction points away from the centre
+            nvec = np.array([tg[1], -tg[0]])  # |nvec| = ds/dxi
+            nvec *= np.sign(nvec @ x)  # traction points away from the centre
             f[2 * ids] += p * N * nvec[0] * 2 * np.pi * x[0] * w
             f[2 * ids + 1] += p * N * nvec[1] * 2 * np.pi * x[0] * w
     axis, base = grid[0][grid[0] >= 0], grid[-1][grid[-1] >= 0]
     fixed = np.unique(np.concatenate([2 * axis, 2 * base + 1]))
     u, _ = solve_dirichlet(K, f, fixed, np.zeros(fixed.size))
     R = np.hypot(xy[:, 0], xy[:, 1])
-    ur = (p * a ** 3 / (E * (b ** 3 - a ** 3))
-          * ((1 - 2 * nu) * R + (1 + nu) * b ** 3 / (2 * R ** 2)))
+    ur = p * a**3 / (E * (b**3 - a**3)) * ((1 - 2 * nu) * R + (1 + nu) * b**3 / (2 * R**2))
     exact = np.column_stack([ur * xy[:, 0] / R, ur * xy[:, 1] / R]).ravel()
     return np.abs(u - exact).max() / np.abs(exact).max()

@@ -76,7 +76,9 @@ def test_assembled_hessian_equals_jax_hessian_of_the_potential(shape):
     np.testing.assert_allclose(g_alone, g_ref, rtol=0, atol=1e-12 * np.max(np.abs(g_ref)))
     np.testing.assert_allclose(H.dense(mesh.layout), H_ref, rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
     # what the solver reads of the blocks, against the same matrix
-    np.testing.assert_allclose(H.diagonal_entries(mesh.layout), np.diag(H_ref), rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
+    np.testing.assert_allclose(
+        H.diagonal_entries(mesh.layout), np.diag(H_ref), rtol=0, atol=1e-11 * np.max(np.abs(H_ref))
+    )
     np.testing.assert_allclose(H.last_column(mesh.layout), H_ref[:, -1], rtol=0, atol=1e-11 * np.max(np.abs(H_ref)))
     for force_control in (False, True):
         mask = mesh.mask(force_control)

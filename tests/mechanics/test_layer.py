@@ -6,10 +6,10 @@ import pytest
 from magdesign.mechanics import LinearElastic, MooneyRivlin, layer_stiffness, shape_factor
 from magdesign.units import kPa, mm
 
-ECOFLEX = LinearElastic(E=83 * kPa, nu=0.49)  # seed 004's elastomer
+ECOFLEX = LinearElastic(E=83 * kPa, nu=0.49)  # Yan et al. (2021)'s Ecoflex 00-50
 
 
-def test_hooke_is_seed004_eq():
+def test_hooke_is_yan_pressure_relation():
     h, S = 3.5 * mm, 36 * mm**2
     k = layer_stiffness(thickness=h, area=S, material=ECOFLEX)
     dz, dx = 0.1 * mm, 0.05 * mm

@@ -1,4 +1,4 @@
-"""Materials: stresses from jax.grad of the energy against closed forms (PHYSICS.md 2.2).
+"""Materials: stresses from jax.grad of the energy against closed forms.
 
 The incompressible closed forms are compared with the full (nearly incompressible)
 energy evaluated at an isochoric F (det F = 1) with the hydrostatic pressure eliminated
@@ -65,9 +65,7 @@ def test_simple_shear_cauchy_stress(name):
     np.testing.assert_allclose(sigma[:, 0, 1], 2.0 * (c10 + c01) * gammas, rtol=RTOL)
     np.testing.assert_allclose(sigma[:, 0, 0] - sigma[:, 2, 2], 2.0 * c10 * gammas**2, rtol=RTOL)
     if c01 > 0:
-        np.testing.assert_allclose(
-            sigma[:, 1, 1] - sigma[:, 2, 2], -2.0 * c01 * gammas**2, rtol=RTOL
-        )
+        np.testing.assert_allclose(sigma[:, 1, 1] - sigma[:, 2, 2], -2.0 * c01 * gammas**2, rtol=RTOL)
 
 
 def test_small_strain_moduli():
@@ -75,11 +73,9 @@ def test_small_strain_moduli():
     mu = 2 * (C10 + C01)
     assert mr.shear_modulus == pytest.approx(mu, rel=1e-15)
     assert mr.bulk_modulus == pytest.approx(1000 * mu, rel=1e-15)
-    # E -> 3 mu in the incompressible limit (PHYSICS.md 2.2: 1.771 MPa)
+    # E -> 3 mu in the incompressible limit (1.771 MPa for the dome-Hall paper's resin)
     assert mr.youngs_modulus == pytest.approx(3 * mu, rel=1e-3)
-    assert MooneyRivlin(c10=C10, c01=C01, bulk=1e15).youngs_modulus == pytest.approx(
-        3 * mu, rel=1e-9
-    )
+    assert MooneyRivlin(c10=C10, c01=C01, bulk=1e15).youngs_modulus == pytest.approx(3 * mu, rel=1e-9)
     pdms = NeoHookean.from_youngs(E=750e3, nu=0.49)
     assert pdms.youngs_modulus == pytest.approx(750e3, rel=1e-13)
     assert pdms.poisson_ratio == pytest.approx(0.49, rel=1e-13)
@@ -120,8 +116,7 @@ def test_grad_with_respect_to_constants_is_finite_and_right():
 
     g = jax.jit(jax.grad(nominal))(C01)
     assert g == pytest.approx(2 * (lam - lam**-2) / lam, rel=1e-9)
-    assert np.all(np.isfinite(jax.grad(lambda c: MooneyRivlin(c10=c, c01=C01).strain_energy(
-        jnp.eye(3)))(C10)))
+    assert np.all(np.isfinite(jax.grad(lambda c: MooneyRivlin(c10=c, c01=C01).strain_energy(jnp.eye(3)))(C10)))
 
 
 @pytest.mark.parametrize(

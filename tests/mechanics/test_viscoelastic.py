@@ -5,22 +5,22 @@ import pytest
 from scipy.signal import lfilter
 
 from magdesign.mechanics import lag_filter, lag_pole, time_constant_from_pole
-from magdesign.mechanics.viscoelastic import SEED001_GAIN
+from magdesign.mechanics.viscoelastic import DOME_HALL_GAIN
 
 
-def test_seed001_pole_is_a_half_second_lag():
+def test_dome_hall_pole_is_a_half_second_lag():
     tau = time_constant_from_pole(0.9804, 100.0)
     assert abs(float(tau) - 0.5) < 0.01  # "about 0.5 s"
     np.testing.assert_allclose(float(tau), -0.01 / np.log(0.9804), rtol=1e-14)
     np.testing.assert_allclose(lag_pole(tau, 100.0), 0.9804, rtol=1e-14)
     # 0.01955 is not 1 - 0.9804 = 0.0196: DC gain 0.9974
-    np.testing.assert_allclose(SEED001_GAIN, 0.01955 / 0.0196, rtol=1e-12)
+    np.testing.assert_allclose(DOME_HALL_GAIN, 0.01955 / 0.0196, rtol=1e-12)
 
 
-def test_reproduces_seed001_transfer_function():
+def test_reproduces_dome_hall_transfer_function():
     x = np.concatenate([np.linspace(0.0, 5.0, 300), np.full(400, 5.0), np.linspace(5.0, 0.0, 100)])
     tau = time_constant_from_pole(0.9804, 100.0)
-    y = lag_filter(x, time_constant=tau, sample_rate=100.0, gain=SEED001_GAIN)
+    y = lag_filter(x, time_constant=tau, sample_rate=100.0, gain=DOME_HALL_GAIN)
     np.testing.assert_allclose(y, lfilter([0.01955], [1.0, -0.9804], x), rtol=1e-12, atol=1e-14)
 
 
@@ -48,11 +48,18 @@ def test_jit_vmap_grad():
     taus = jnp.array([0.1, 0.3, 1.0])
     mapped = jax.vmap(final)(taus)
     np.testing.assert_allclose(mapped, [final(t) for t in taus], rtol=1e-13)
-    assert np.all(np.isfinite(jax.grad(lambda t: jnp.sum(lag_filter(jnp.zeros(5), time_constant=t, sample_rate=1e3)))(1e-6)))
+    assert np.all(
+        np.isfinite(jax.grad(lambda t: jnp.sum(lag_filter(jnp.zeros(5), time_constant=t, sample_rate=1e3)))(1e-6))
+    )
 
 
-@pytest.mark.parametrize("kwargs, name", [(dict(time_constant=0.0, sample_rate=100.0), "time_constant"),
-                                          (dict(time_constant=0.5, sample_rate=-1.0), "sample_rate")])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        (dict(time_constant=0.0, sample_rate=100.0), "time_constant"),
+        (dict(time_constant=0.5, sample_rate=-1.0), "sample_rate"),
+    ],
+)
 def test_bad_input(kwargs, name):
     with pytest.raises(ValueError, match=name):
         lag_filter(jnp.zeros(4), **kwargs)

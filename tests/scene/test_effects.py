@@ -6,10 +6,10 @@ from collections import Counter
 import jax
 import numpy as np
 import pytest
+from scene_helpers import equations, example
 
 from magdesign.scene import EFFECT_NAMES, Loads, scene_from_spec
 from magdesign.scene.core import chain
-from scene_helpers import equations, example
 
 LOADS = Loads(np.linspace(0.0, 1.0, 4), shear=np.array([0.1, 0.0]))
 RANDOM = {"random_bits", "random_wrap", "random_seed", "threefry2x32", "random_unwrap"}

@@ -1,4 +1,4 @@
-"""Seed 004 in the scene frame: a valid field, the self-decoupling of the ideal film
+"""The film-Hall sensor (Yan et al. 2021) in the scene frame: a valid field, the self-decoupling of the ideal film
 model, the Eq. 3 read-out, and the example design against its closed form."""
 
 import dataclasses
@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 import scipy.optimize
+from scene_helpers import example
 
 from magdesign.design import solve
 from magdesign.design.spec import problem_from_spec
@@ -15,7 +16,6 @@ from magdesign.fields import film_angle
 from magdesign.inverse import film_forces
 from magdesign.scene import Loads, outputs, parameters, scene_from_spec, simulate, with_parameters
 from magdesign.units import SpecError
-from scene_helpers import example
 
 REST = Loads(np.zeros(1))  # one unloaded point
 
@@ -50,8 +50,8 @@ def test_field_is_divergence_and_curl_free_in_the_scene_frame(ideal, periods):
 
 
 def test_scene_field_signs_below_an_infinite_film(ideal):
-    """z up: below the film Bx / Bz = -tan(kx) for J = J0 (-sin kx, 0, -cos kx) (PHYSICS.md 1.2
-    with J0 -> -J0), and a background given in the scene frame adds with its own sign."""
+    """z up: below the film Bx / Bz = -tan(kx) for J = J0 (-sin kx, 0, -cos kx) (magdesign.fields.film's
+    pattern with J0 -> -J0), and a background given in the scene frame adds with its own sign."""
     k, h, d, j0 = 2 * np.pi / 6e-3, 3.5e-3, 0.5e-3, 85e-3
     x = np.linspace(-1.4e-3, 1.4e-3, 5)
     points = np.stack([x, 0 * x, 0 * x], -1)
@@ -104,7 +104,9 @@ def test_example_design_reaches_its_closed_form():
     period = 2 * np.pi * D / kd
     assert result.status == "successful"
     assert result.parameters["magnet.period"] == pytest.approx(period, rel=1e-9)
-    assert result.parameters["mechanics.thickness"] == pytest.approx(np.log(1 / FRACTION) * period / (2 * np.pi), rel=1e-9)
+    assert result.parameters["mechanics.thickness"] == pytest.approx(
+        np.log(1 / FRACTION) * period / (2 * np.pi), rel=1e-9
+    )
 
 
 def test_example_design_sees_its_background_field():
@@ -132,7 +134,7 @@ def test_outputs_match_closed_forms(ideal):
     out = outputs(ideal, REST)
     k, h = 2 * np.pi / 6e-3, 3.5e-3
     assert np.isclose(out["field_fraction"], np.exp(-k * h), rtol=1e-14)
-    # seed 004: |B| >= 0.02 |B|max for h <= ln(50) / k
+    # Yan et al.: |B| >= 0.02 |B|max for h <= ln(50) / k
     at_limit = outputs(with_parameters(ideal, {"mechanics.thickness": np.log(50) / k}), REST)
     assert np.isclose(at_limit["field_fraction"], 0.02, rtol=1e-12)
     # Hooke layer: k_n = E S / h, k_s = G S / h

@@ -8,17 +8,17 @@ import jax.numpy as jnp
 import magpylib as magpy
 import numpy as np
 import pytest
+from scene_helpers import example
 from scipy.spatial.transform import Rotation
 
 from magdesign.scene import Loads, outputs, scene_from_spec, to_magpylib
 from magdesign.units import SpecError
-from scene_helpers import example
 
 DEG = np.pi / 180
 
 
 def _body_to_scene(alpha, beta, gamma):
-    """The transpose of Rx(alpha) Ry(beta) Rz(gamma) (seed 002, Eq. 4: scene -> body)."""
+    """The transpose of Rx(alpha) Ry(beta) Rz(gamma) (the spin-valve paper's Eq. 4: scene -> body)."""
     ca, sa, cb, sb, cg, sg = np.cos(alpha), np.sin(alpha), np.cos(beta), np.sin(beta), np.cos(gamma), np.sin(gamma)
     rx = np.array([[1, 0, 0], [0, ca, -sa], [0, sa, ca]])
     ry = np.array([[cb, 0, sb], [0, 1, 0], [-sb, 0, cb]])
@@ -27,7 +27,7 @@ def _body_to_scene(alpha, beta, gamma):
 
 
 def _posed_spec():
-    """Seed 001's dome and Hall sensor with a tilted, offset, diametral-plus-axial magnet,
+    """The dome-Hall sensor's dome and Hall chip with a tilted, offset, diametral-plus-axial magnet,
     a second magnet carried by the dome and a third fixed beside the sensor."""
     spec = example("dome_hall")
     spec["magnet"].update(
@@ -36,10 +36,19 @@ def _posed_spec():
         offset=["0.3 mm", "-0.2 mm", "0.1 mm"],
         rotation=["10 deg", "-20 deg", "30 deg"],
         extra=[
-            {"radius": "1 mm", "height": "2 mm", "polarization": ["0 T", "0.5 T", "-0.9 T"], "position": ["3 mm", "1 mm", "9 mm"]},
             {
-                "radius": "0.5 mm", "height": "0.2 mm", "polarization": ["1.2 T", "0 T", "0 T"],
-                "position": ["-4 mm", "0 mm", "-1 mm"], "rotation": ["0 deg", "90 deg", "0 deg"], "moves": False,
+                "radius": "1 mm",
+                "height": "2 mm",
+                "polarization": ["0 T", "0.5 T", "-0.9 T"],
+                "position": ["3 mm", "1 mm", "9 mm"],
+            },
+            {
+                "radius": "0.5 mm",
+                "height": "0.2 mm",
+                "polarization": ["1.2 T", "0 T", "0 T"],
+                "position": ["-4 mm", "0 mm", "-1 mm"],
+                "rotation": ["0 deg", "90 deg", "0 deg"],
+                "moves": False,
             },
         ],
     )
@@ -54,9 +63,13 @@ def _hand_built_magnets(displacement):
         position=np.array([0.3e-3, -0.2e-3, 7.4e-3 + 0.5e-3 + 0.1e-3]) + displacement,
         orientation=Rotation.from_matrix(_body_to_scene(10 * DEG, -20 * DEG, 30 * DEG)),
     )
-    carried = magpy.magnet.Cylinder(polarization=(0, 0.5, -0.9), dimension=(2e-3, 2e-3), position=np.array([3e-3, 1e-3, 9e-3]) + displacement)
+    carried = magpy.magnet.Cylinder(
+        polarization=(0, 0.5, -0.9), dimension=(2e-3, 2e-3), position=np.array([3e-3, 1e-3, 9e-3]) + displacement
+    )
     fixed = magpy.magnet.Cylinder(
-        polarization=(1.2, 0, 0), dimension=(1e-3, 0.2e-3), position=(-4e-3, 0, -1e-3),
+        polarization=(1.2, 0, 0),
+        dimension=(1e-3, 0.2e-3),
+        position=(-4e-3, 0, -1e-3),
         orientation=Rotation.from_matrix(_body_to_scene(0, 90 * DEG, 0)),
     )
     return magpy.Collection(main, carried, fixed)
@@ -85,8 +98,10 @@ def test_to_magpylib_gives_the_scenes_field_in_each_chip_frame():
     scene = scene_from_spec(_posed_spec())
     objects = to_magpylib(scene)
     assert len(objects.sources.children) == 3 and len(objects.sensors) == 1
-    np.testing.assert_allclose(objects.sources.getB(np.zeros(3)), _hand_built_magnets(np.zeros(3)).getB(np.zeros(3)), rtol=1e-12)
-    # a matrix of chips turned to face outwards (seed 002): magpylib's readings are in the chip frames
+    np.testing.assert_allclose(
+        objects.sources.getB(np.zeros(3)), _hand_built_magnets(np.zeros(3)).getB(np.zeros(3)), rtol=1e-12
+    )
+    # a matrix of chips turned to face outwards (as in the spin-valve matrix): magpylib's readings are in the chip frames
     spec = example("spin_valve_matrix")
     spec["sensor"]["orientation"] = "radial"
     scene = scene_from_spec(spec)

@@ -1,15 +1,15 @@
-"""Cylinder-magnet scenes: seed 001 against closed forms, seed 002's in-plane range,
-seed 003's slip flags."""
+"""Cylinder-magnet scenes: the dome-Hall sensor against closed forms, the spin-valve
+matrix's in-plane range, the GMR-inductor sensor's slip flags."""
 
 import jax
 import magpylib as magpy
 import numpy as np
 import pytest
+from scene_helpers import example
 
 from magdesign.fields import cylinder_on_axis
 from magdesign.scene import Loads, loads_from_spec, outputs, scene_from_spec, simulate
 from magdesign.transducers import count_events
-from scene_helpers import example
 
 
 def test_inductors_flag_each_slip():
@@ -32,7 +32,7 @@ def test_stick_phases_after_a_pause_are_not_slips(seed):
     """Four slips, each stick phase starting after a pause: with the inductors' own noise
     (the spec's 1.4 mV) the 3-sigma band has a width, so only the four snaps are flagged.
     Noiseless, a constant history's band has zero width and the start of every stick
-    phase (and rounding) is flagged too: 9 events, found by the seed-003 study."""
+    phase (and rounding) is flagged too: 9 events, found by the GMR-inductor study."""
     t = np.arange(1000) * 1e-3
     shear = np.zeros_like(t)
     starts = (0.05, 0.282, 0.514, 0.746)
@@ -58,9 +58,10 @@ def test_dome_hall_outputs_match_closed_forms():
     youngs, t, radius, force = 6 * (0.1182e6 + 0.1769e6), 2e-3, 7e-3, 5.0
     compliance = radius * np.sqrt(3 * (1 - 0.25)) / (4 * youngs * t**2)
     assert np.isclose(out["compliance"], compliance, rtol=1e-3)
-    assert np.isclose(out["compliance"], 0.371e-3, rtol=2e-3)  # PHYSICS.md 2.3: 0.37 mm/N
+    assert np.isclose(out["compliance"], 0.371e-3, rtol=2e-3)  # Reissner at the mid-surface radius 7 mm: 0.37 mm/N
     closest = 7.4e-3 - out["compliance"] * force
     assert np.isclose(out["closest_gap"], closest, rtol=1e-12)
+
     # the sensor is on the axis below the bottom face; Bz is even about the magnet's centre
     def on_axis(z):
         return cylinder_on_axis(z, radius=1.5e-3, height=1e-3, remanence=1.17)
@@ -84,8 +85,10 @@ def test_spin_valve_matrix_in_plane_field_range():
     offsets = np.array([[100e-6 * u, 47.5e-6 * v, 0.0] for u in nodes for v in nodes])
     weights = np.outer(weights, weights).ravel() / 4
     bx = [
-        weights @ magpy.magnet.Cylinder(polarization=(0, 0, 1.2), dimension=(1e-3, 1e-3), position=(0, 0, 4e-3 - press))
-        .getB(chips[:, None, :] + offsets)[..., 0].T
+        weights
+        @ magpy.magnet.Cylinder(polarization=(0, 0, 1.2), dimension=(1e-3, 1e-3), position=(0, 0, 4e-3 - press))
+        .getB(chips[:, None, :] + offsets)[..., 0]
+        .T
         for press in np.linspace(0.0, 3.5e-3 - float(out["closest_gap"]), 11)
     ]
     assert np.isclose(out["inplane_field_max"], np.max(np.abs(bx)), rtol=1e-9)

@@ -2,10 +2,10 @@
 
 import jax
 import pytest
+from scene_helpers import EXAMPLES, example
 
 from magdesign.scene import loads_from_spec, outputs, scene_from_spec
 from magdesign.units import parse
-from scene_helpers import EXAMPLES, example
 
 
 @pytest.mark.parametrize("name", sorted(path.stem for path in EXAMPLES.glob("*.toml")))

@@ -4,10 +4,10 @@ largest load."""
 import magpylib as magpy
 import numpy as np
 import pytest
+from scene_helpers import example
 
 from magdesign.scene import loads_from_spec, scene_from_spec
 from magdesign.scene.picture import GRID_POINTS, MM, SOFT_GRID_POINTS, plot_scene
-from scene_helpers import example
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -23,7 +23,7 @@ def _drawn(axis):
 
 
 def test_dome_picture_shows_the_magnets_field_at_rest_and_pressed(tmp_path):
-    """Seed 001's dome: |B| in the plane y = 0 against magpylib, the magnet 7.4 mm above the
+    """The dome-Hall sensor's dome: |B| in the plane y = 0 against magpylib, the magnet 7.4 mm above the
     sensor at rest and lowered by the dome's travel at 5 N in the second panel."""
     spec = example("dome_hall")
     scene, loads = scene_from_spec(spec), loads_from_spec(spec)
@@ -35,7 +35,9 @@ def test_dome_picture_shows_the_magnets_field_at_rest_and_pressed(tmp_path):
         x, z, magnitude = _drawn(axis)
         xx, zz = np.meshgrid(x, z)
         points = np.stack([xx, 0 * xx, zz], -1).reshape(-1, 3)
-        magnet = magpy.magnet.Cylinder(polarization=(0, 0, 1.17), dimension=(3e-3, 1e-3), position=(0, 0, 7.9e-3 + drop))
+        magnet = magpy.magnet.Cylinder(
+            polarization=(0, 0, 1.17), dimension=(3e-3, 1e-3), position=(0, 0, 7.9e-3 + drop)
+        )
         expected = np.linalg.norm(magnet.getB(points), axis=-1).reshape(magnitude.shape)
         outside = ~((np.abs(xx) <= 1.5e-3) & (np.abs(zz - 7.9e-3 - drop) <= 0.5e-3))
         np.testing.assert_allclose(magnitude[outside], expected[outside], rtol=1e-9)
@@ -54,9 +56,17 @@ def test_every_kind_of_scene_draws(name, tmp_path):
 def test_further_magnets_are_in_the_picture(tmp_path):
     spec = example("dome_hall")
     spec["magnet"]["fidelity"] = "exact"
-    spec["magnet"]["extra"] = [{"radius": "1 mm", "height": "2 mm", "polarization": ["0 T", "0 T", "1 T"], "position": ["15 mm", "0 mm", "-6 mm"], "moves": False}]
+    spec["magnet"]["extra"] = [
+        {
+            "radius": "1 mm",
+            "height": "2 mm",
+            "polarization": ["0 T", "0 T", "1 T"],
+            "position": ["15 mm", "0 mm", "-6 mm"],
+            "moves": False,
+        }
+    ]
     figure = plot_scene(scene_from_spec(spec), loads_from_spec(spec), tmp_path / "two.png")
     for axis in figure.axes[:2]:
-        (x_min, x_max), (z_min, z_max) = axis.get_xlim(), axis.get_ylim()
+        (_, x_max), (z_min, _) = axis.get_xlim(), axis.get_ylim()
         assert x_max > 16 and z_min < -7  # mm: the fixed magnet's outline is inside
         assert len(axis.patches) >= 3  # the two magnets and the dome

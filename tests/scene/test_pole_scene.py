@@ -1,4 +1,4 @@
-"""Seed 000's suspension: the reduced model's restoring force against the same charge model
+"""The magnetic-suspension sensor: the reduced model's restoring force against the same charge model
 evaluated with magpylib, and the method-of-moments level's fields and forces against
 magpylib's cuboids and the Kelvin force and torque on its cells (PoleScene)."""
 
@@ -7,13 +7,12 @@ import jax
 import magpylib as magpy
 import numpy as np
 import pytest
-
-from magdesign.scene import parameters, scene_from_spec, with_parameters
-from magdesign.units import MU0, SpecError
+from scene_helpers import example
 from scipy.spatial.transform import Rotation
 
 from magdesign.fields import soft
-from scene_helpers import example
+from magdesign.scene import parameters, scene_from_spec, with_parameters
+from magdesign.units import MU0, SpecError
 
 
 def reduced_spec():
@@ -38,9 +37,11 @@ def test_tangential_force_against_magpylib_and_hand_derived_lever(half):
     thetas = np.deg2rad([-50.0, -10.0, 1.0, 10.0, 40.0, 50.0])
     force = np.asarray(eqx.filter_jit(lambda s, t: jax.vmap(s.tangential_force)(t))(scene, thetas))
 
-    plate = magpy.magnet.Cylinder(polarization=(0, 0, p["magnet.remanence"]),
-                                  dimension=(2 * p["magnet.radius"], p["magnet.height"]),
-                                  position=(0, 0, -p["magnet.height"] / 2))
+    plate = magpy.magnet.Cylinder(
+        polarization=(0, 0, p["magnet.remanence"]),
+        dimension=(2 * p["magnet.radius"], p["magnet.height"]),
+        position=(0, 0, -p["magnet.height"] / 2),
+    )
     r, centre = p["pole.ball_radius"], np.array([0, 0, p["geometry.gap"] + p["pole.ball_radius"]])
     area = np.pi * p["pole.diameter"] ** 2 / 4
     for theta, value in zip(thetas, force):
@@ -65,9 +66,11 @@ def test_a_rod_longer_than_the_ball_is_a_spec_error():
 
 
 def _plate(p):
-    return magpy.magnet.Cylinder(polarization=(0, 0, p["magnet.remanence"]),
-                                 dimension=(2 * p["magnet.radius"], p["magnet.height"]),
-                                 position=(0, 0, -p["magnet.height"] / 2))
+    return magpy.magnet.Cylinder(
+        polarization=(0, 0, p["magnet.remanence"]),
+        dimension=(2 * p["magnet.radius"], p["magnet.height"]),
+        position=(0, 0, -p["magnet.height"] / 2),
+    )
 
 
 field = eqx.filter_jit(lambda scene, points, displacement: scene.source_field(points, displacement))
@@ -86,9 +89,12 @@ def _rod_in_magpylib(scene, theta):
     centre, turn = (np.asarray(v) for v in scene._rod_pose(theta, np.zeros(3)))
     magnetization = np.asarray(soft.magnetization(rod, scene._rod_external(theta, np.zeros(3))))
     orientation = Rotation.from_matrix(turn)
-    cells = [magpy.magnet.Cuboid(polarization=MU0 * m, dimension=np.asarray(rod.cell), position=centre + turn @ q,
-                                 orientation=orientation)
-             for q, m in zip(np.asarray(rod.centres), magnetization)]
+    cells = [
+        magpy.magnet.Cuboid(
+            polarization=MU0 * m, dimension=np.asarray(rod.cell), position=centre + turn @ q, orientation=orientation
+        )
+        for q, m in zip(np.asarray(rod.centres), magnetization)
+    ]
     return magpy.Collection(*cells), centre, turn, np.asarray(rod.centres), magnetization
 
 
@@ -121,8 +127,9 @@ def test_moments_coenergy_gradient_is_the_kelvin_force_and_torque():
     positions = centre + local @ turn.T
     moments = volume * magnetization @ turn.T  # A m^2, world frame
     step = 1e-7
-    gradient = np.stack([(plate.getB(positions + step * e) - plate.getB(positions - step * e)) / (2 * step)
-                         for e in np.eye(3)], axis=1)  # [cell, d/dx_k, B_j]
+    gradient = np.stack(
+        [(plate.getB(positions + step * e) - plate.getB(positions - step * e)) / (2 * step) for e in np.eye(3)], axis=1
+    )  # [cell, d/dx_k, B_j]
     forces = np.einsum("ck,ckj->cj", moments, gradient)  # (m . grad) B, curl-free B
     ball = np.array([0.0, 0.0, p["geometry.gap"] + p["pole.ball_radius"]])
     torque = np.sum(np.cross(positions - ball, forces) + np.cross(moments, plate.getB(positions)), axis=0)
@@ -132,8 +139,10 @@ def test_moments_coenergy_gradient_is_the_kelvin_force_and_torque():
     _, _, turn0, local0, m0 = _rod_in_magpylib(scene, 0.0)
     centre0 = np.asarray(scene._rod_pose(0.0, np.zeros(3))[0])
     pos0, mom0 = centre0 + local0 @ turn0.T, volume * m0 @ turn0.T
-    fz = sum(np.dot(m, (plate.getB(x + step * np.eye(3)[2]) - plate.getB(x - step * np.eye(3)[2])) / (2 * step))
-             for x, m in zip(pos0, mom0))
+    fz = sum(
+        np.dot(m, (plate.getB(x + step * np.eye(3)[2]) - plate.getB(x - step * np.eye(3)[2])) / (2 * step))
+        for x, m in zip(pos0, mom0)
+    )
     np.testing.assert_allclose(float(eqx.filter_jit(lambda s: s.attraction())(scene)), -fz, rtol=1e-5)
 
 
@@ -177,8 +186,10 @@ def test_a_saturating_rod():
     spec["pole"]["saturation"] = "0.05 T"
     scene = scene_from_spec(spec)
     assert "pole.saturation" in scene.parameter_paths and "pole.saturation" not in linear.parameter_paths
-    peaks = [MU0 * float(np.linalg.norm(soft.magnetization(s.rod, s._rod_external(0.0, np.zeros(3))), axis=-1).max())
-             for s in (linear, scene)]
+    peaks = [
+        MU0 * float(np.linalg.norm(soft.magnetization(s.rod, s._rod_external(0.0, np.zeros(3))), axis=-1).max())
+        for s in (linear, scene)
+    ]
     assert peaks[0] > 0.1 and peaks[1] < 0.05, peaks
     for value, match in (("0 T", "pole.saturation"), ("1 mm", "pole.saturation")):
         spec["pole"]["saturation"] = value

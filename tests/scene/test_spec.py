@@ -4,10 +4,10 @@ import copy
 
 import numpy as np
 import pytest
-
-from magdesign.scene import loads_from_spec, scene_from_spec
-from magdesign.units import SpecError
 from scene_helpers import example
+
+from magdesign.scene import loads_from_spec, outputs, scene_from_spec
+from magdesign.units import SpecError
 
 
 def _broken(edit):
@@ -62,7 +62,6 @@ def test_a_scene_and_its_copy_with_new_parameters_share_one_compiled_program():
     a jitted function of the scene is not compiled again for a copy with new values (found
     by a study: weakly typed spec values against strongly typed replacements)."""
     import equinox as eqx
-    import jax
 
     from magdesign.scene import parameters, with_parameters
 
@@ -77,3 +76,42 @@ def test_a_scene_and_its_copy_with_new_parameters_share_one_compiled_program():
 
     attraction(scene), attraction(copy)
     assert len(traces) == 1
+
+
+# A magnet rides on the part that carries it: on or in a layer, at a dome's apex.
+@pytest.mark.parametrize(
+    "name, edit, fragment",
+    [
+        # the 9.06 mm gap on a 4.69 mm layer: the magnet would float 4.37 mm above the silicone
+        (
+            "spin_valve_matrix",
+            lambda s: (s["geometry"].update(gap="9.06 mm"), s["mechanics"].update(thickness="4.69 mm")),
+            "floats above the 4.69 mm layer",
+        ),
+        ("gmr_inductor", lambda s: s["geometry"].update(gap="15.5 mm"), "floats above the 15 mm layer"),
+        # an 8 mm dome with a 2 mm wall carries a 1 mm magnet whose face lies from 5 to 8 mm up
+        ("dome_hall", lambda s: s["geometry"].update(gap="8.2 mm"), "expected a gap from 5 to 8 mm"),
+        ("dome_hall", lambda s: s["geometry"].update(gap="4.9 mm"), "expected a gap from 5 to 8 mm"),
+    ],
+)
+def test_a_magnet_that_misses_its_layer_or_dome_is_refused(name, edit, fragment):
+    spec = example(name)
+    edit(spec)
+    with pytest.raises(SpecError, match="^geometry.gap: ") as error:
+        scene_from_spec(spec)
+    assert fragment in str(error.value) and "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize(
+    "name, gap, embed",
+    [
+        ("spin_valve_matrix", "2.5 mm", 3.5e-3 - 2.5e-3),  # 3.5 mm of PDMS, the magnet's face 1 mm into it
+        ("gmr_inductor", "15 mm", 0.0),  # the magnet rests on the 15 mm gel
+        ("dome_hall", "7.4 mm", 8e-3 - 7.4e-3),  # 0.6 mm below the 8 mm dome's outer apex
+        ("dome_hall", "5 mm", 8e-3 - 5e-3),  # hanging under the inner apex (8 - 2 mm): its top face at 6 mm
+    ],
+)
+def test_embed_is_the_depth_of_the_magnet_below_the_top_of_its_part(name, gap, embed):
+    spec = example(name)
+    spec["geometry"]["gap"] = gap
+    assert float(outputs(scene_from_spec(spec), loads_from_spec(spec))["embed"]) == pytest.approx(embed, abs=1e-15)

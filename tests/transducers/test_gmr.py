@@ -8,7 +8,7 @@ from magdesign.transducers import SpinValve, chip_frame, inesc_spin_valve, panas
 from magdesign.units import MU0, deg, mT
 
 
-def test_seed002_chip_voltages():
+def test_spin_valve_chip_voltages():
     chip = inesc_spin_valve()
     field = jnp.array([[0.0, 0.0, 0.0], [-1 * mT, 0.0, 0.0], [1 * mT, 0.0, 0.0]])
     volts = chip.voltage(field)
@@ -66,7 +66,7 @@ def test_equivalent_field_inverts_eqs_1_2():
     np.testing.assert_allclose(chip.equivalent_field(volts, reference=2.0), fields[:, 0], rtol=1e-12)
 
 
-def test_seed000_meander():
+def test_suspension_meander():
     meander = panasonic_meander()
     one_amp_per_metre = jnp.array([MU0 * 1.0, 0.0, 0.0])
     np.testing.assert_allclose(meander.voltage(jnp.zeros(3)), 0.6, rtol=1e-14)
@@ -95,7 +95,10 @@ def test_jit_vmap_grad_finite_at_zero_tilt_and_zero_field():
         (dict(resistance=2e3, sensitivity=7.2, bias_current=-1e-3), "bias_current"),
         (dict(resistance=0.0, sensitivity=7.2, bias_current=1e-3), "resistance"),
         (dict(resistance=2e3, sensitivity=-7.2, bias_current=1e-3), "sensitivity"),
-        (dict(resistance=2e3, sensitivity=7.2, bias_current=1e-3, linear_range=2e-3, saturation_field=1e-3), "linear_range"),
+        (
+            dict(resistance=2e3, sensitivity=7.2, bias_current=1e-3, linear_range=2e-3, saturation_field=1e-3),
+            "linear_range",
+        ),
     ],
 )
 def test_bad_configuration_names_the_argument(kwargs, name):

@@ -5,7 +5,7 @@ import pytest
 
 from magdesign.transducers import count_events, emf, slip_flags
 
-DT = 1e-3  # seed 003 samples every 1 ms
+DT = 1e-3  # the GMR-inductor paper samples every 1 ms (Fig. 13)
 
 
 def test_emf_of_linear_flux_is_exact():
@@ -41,7 +41,7 @@ def _stick_slip_flux(slip_sizes, n_steps=3000, channels=4, seed=1):
 
 
 def test_three_slips_flagged_exactly_three_times():
-    flux, slip_at = _stick_slip_flux([1.0, 0.6, 0.1])  # the third slip is small, as in seed 003's
+    flux, slip_at = _stick_slip_flux([1.0, 0.6, 0.1])  # the third slip is small, as in the GMR-inductor paper's Fig. 13
     output = emf(flux, dt=DT, turns=10)
     flags = slip_flags(output, window=100)
     assert int(count_events(flags)) == 3

@@ -22,7 +22,7 @@ import mpmath as mp
 
 mp.mp.dps = 40
 
-# height / radius: a 1 nm thick disc of 1 mm radius, thin films, the seed-001 magnet,
+# height / radius: a 1 nm thick disc of 1 mm radius, thin films, the dome-Hall magnet (3 x 1 mm),
 # a cube-like one, long rods up to 1000 radii.
 ASPECTS = ("1e-6", "1e-3", "0.04", "0.6666666666666666", "2", "20", "1000")
 
@@ -52,12 +52,25 @@ def points(b):
     """(x, y, z) in radii: the axis, faces, edges, the wall, near the axis, far away."""
     c, s = 0.7648421872844885, 0.644217687237691  # cos, sin of 0.7 rad
     near = [
-        (0, 0, b + 0.01), (0, 0, b + 0.3), (0, 0, 3.16), (0, 0, b + 10), (0, 0, 1e3),
-        (0.3 * c, 0.3 * s, b + 1e-3), (0.5, 0.2, b + 0.7),
-        (1 + 1e-9, 0, b), (c * (1 + 1e-3), s * (1 + 1e-3), b + 1e-3), (1.0, 0, b + 1e-7),
-        (1.5 * c, 1.5 * s, 0), (1 + 1e-4, 0, 0.5 * b), (2.0, 1.0, b + 0.1),
-        (1e-4 * c, 1e-4 * s, b + 0.5), (0.02, 0, b + 1), (0.06 * c, 0.06 * s, -b - 4.7),
-        (3.0, 2.0, 1.0), (0.6e3, 0, 0.8e3), (0.5 * c, 0.5 * s, 0.5 * b),
+        (0, 0, b + 0.01),
+        (0, 0, b + 0.3),
+        (0, 0, 3.16),
+        (0, 0, b + 10),
+        (0, 0, 1e3),
+        (0.3 * c, 0.3 * s, b + 1e-3),
+        (0.5, 0.2, b + 0.7),
+        (1 + 1e-9, 0, b),
+        (c * (1 + 1e-3), s * (1 + 1e-3), b + 1e-3),
+        (1.0, 0, b + 1e-7),
+        (1.5 * c, 1.5 * s, 0),
+        (1 + 1e-4, 0, 0.5 * b),
+        (2.0, 1.0, b + 0.1),
+        (1e-4 * c, 1e-4 * s, b + 0.5),
+        (0.02, 0, b + 1),
+        (0.06 * c, 0.06 * s, -b - 4.7),
+        (3.0, 2.0, 1.0),
+        (0.6e3, 0, 0.8e3),
+        (0.5 * c, 0.5 * s, 0.5 * b),
     ]
     if b > 1:  # long rods: beside the middle, beyond the ends, along the side
         near += [(0.3, 0.2, b + 130), (2 * c, 2 * s, b + 30), (50, 0, 0.5 * b), (1e-3, 0, b + 300), (1.2, 0, 0.9 * b)]

@@ -350,7 +350,7 @@ def spheres():
             # (c) induced field, p = (0, 0, d): local frame z' = -z, x' = x, y' = -y
             m_par, m_perp = -1, 0
             pts = {"B_beyond": (2 * A, mp.pi, 0), "B_beside": (mp.mpf("1.5") * A, mp.pi / 2, 0)}
-            for key, (r, t, f) in pts.items():
+            for key, (r, t, _) in pts.items():
                 n = terms_needed(mu, d, r)
                 p, dp = legendre(mp.cos(t), n)
                 hr = ht = mp.mpf(0)
@@ -366,8 +366,13 @@ def spheres():
                 if key == "B_beyond":  # r_hat = -z' = +z
                     row[key] = {"point": [0.0, 0.0, float(d + 2 * A)], "B": [s(0), s(0), s(MU0 * hr)]}
                 else:  # r_hat = x' = x, theta_hat = -z' = +z
-                    row[key] = {"point": [float(mp.mpf("1.5") * A), 0.0, float(d)], "B": [s(MU0 * hr), s(0), s(MU0 * ht)]}
-                print(f"    {key}: B = {[mp.nstr(v, 15) for v in ([0, 0, MU0 * hr] if key == 'B_beyond' else [MU0 * hr, 0, MU0 * ht])]} T ({n} orders)")
+                    row[key] = {
+                        "point": [float(mp.mpf("1.5") * A), 0.0, float(d)],
+                        "B": [s(MU0 * hr), s(0), s(MU0 * ht)],
+                    }
+                print(
+                    f"    {key}: B = {[mp.nstr(v, 15) for v in ([0, 0, MU0 * hr] if key == 'B_beyond' else [MU0 * hr, 0, MU0 * ht])]} T ({n} orders)"
+                )
 
             # boundary conditions at r = a with the closed-form dipole potential (axial case):
             # Phi_in = Phi_dipole + Phi_induced and mu_r dPhi_in/dr = d(Phi_dipole + Phi_induced)/dr
@@ -395,7 +400,10 @@ def spheres():
                 pos[axis] = d
                 H = lambda *q: dipole_field_global(*q)
                 hg = [
-                    sum(H(*pos)[j] * mp.diff(lambda u: H(*[u if k == j else pos[k] for k in range(3)])[i], pos[j]) for j in range(3))
+                    sum(
+                        H(*pos)[j] * mp.diff(lambda u: H(*[u if k == j else pos[k] for k in range(3)])[i], pos[j])
+                        for j in range(3)
+                    )
                     for i in range(3)
                 ]
                 f_dip = -MU0 * alpha * hg[axis]  # along z' = towards the dipole
@@ -431,7 +439,11 @@ def spheres():
 def dipole_field_global(x, y, z):
     r = mp.sqrt(x * x + y * y + z * z)
     mr = z  # m = (0, 0, 1)
-    return [3 * mr * x / r**5 / (4 * mp.pi), 3 * mr * y / r**5 / (4 * mp.pi), (3 * mr * z / r**2 - 1) / r**3 / (4 * mp.pi)]
+    return [
+        3 * mr * x / r**5 / (4 * mp.pi),
+        3 * mr * y / r**5 / (4 * mp.pi),
+        (3 * mr * z / r**2 - 1) / r**3 / (4 * mp.pi),
+    ]
 
 
 def main():

@@ -1,0 +1,871 @@
+"""The one table of spec keys: every key a spec may hold, with what it means.
+
+Each :class:`Key` gives its table and name (dotted: ``mechanics.thickness``; the tables of a
+``[[soft]]`` or ``[[magnet.extra]]`` array are ``soft`` and ``magnet.extra``; a ``*`` stands
+for a name the spec chooses, as a design variable's parameter), its type, SI unit, default,
+physical domain, plausible range for a plain number, presets and a one-line meaning.
+
+The readers (:mod:`magdesign.scene.build`, :mod:`magdesign.scene.loads`,
+:mod:`magdesign.design.spec`, :mod:`magdesign.design.tolerance`) look every key up here
+(:func:`lookup`): a key read in code and missing from this table, or read as another type,
+unit or default than the table gives, raises :class:`UnlistedKeyError` (a programming error,
+never a bad spec). The spec reference (:mod:`magdesign.spec.reference`) is rendered from it.
+
+A plain number (no unit string) is SI. Outside its key's plausible range it is read all the
+same, with a :class:`PlausibilityWarning` naming the key and the unit it was read in
+(``mechanics.thickness = 3 was read as 3 m; write "3 mm" for millimetres``). A value with a
+unit far outside real parts (a remanence above NdFeB's) warns too.
+"""
+
+import contextlib
+import dataclasses
+import math
+import re
+import warnings
+from collections.abc import Callable, Mapping
+
+from magdesign.transducers import ak8963, inesc_spin_valve, mlx90393, nve_aa003, panasonic_meander
+from magdesign.units import SpecError, deg, unit_factor
+
+# The types a key's value may have (Key.kind).
+KINDS = {
+    "quantity": 'a number with a unit ("3 mm") or a plain SI number',
+    "quantities": "a list of quantities",
+    "points": "a list of [x, y, z] quantities",
+    "choice": "one of the names listed",
+    "names": "a list of names",
+    "integer": "a whole number",
+    "integers": "a list of whole numbers",
+    "bool": "true or false",
+    "tables": "an array of tables, [[...]]",
+    "quantity or table": "a quantity, or a table of the keys below it",
+    "output": "the name of an output",
+    "unit": 'a unit to show the output in, e.g. "mm"',
+    "text": "a string",
+}
+
+
+class Required:
+    """The default of a key that a spec must give (where its table applies)."""
+
+    def __repr__(self):
+        return "required"
+
+
+REQUIRED = Required()
+
+
+@dataclasses.dataclass(frozen=True)
+class Depends:
+    """The default of a key that depends on the rest of the spec, said in words."""
+
+    text: str
+
+
+# A physical domain: (lowest, lowest allowed?, highest, highest allowed?); None: no bound there.
+POSITIVE = (0.0, False, None, False)
+NONNEGATIVE = (0.0, True, None, False)
+# Plausible magnitudes of a plain SI number, (low, high): a plain number whose magnitude is
+# above high, or nonzero and below low, is most likely written in another unit.
+LENGTH = (0.0, 0.5)
+AREA = (0.0, 0.25)
+FIELD = (0.0, 2.0)
+FORCE = (0.0, 1e4)
+MODULUS = (1e3, 1e12)
+ANGLE = (0.0, 2.0 * math.pi)
+TIME = (0.0, 1e4)
+VOLTAGE = (0.0, 100.0)
+READING = "T or V"  # a reading's unit: T for a Hall chip, V for a spin valve or GMR bridge
+READING_PLAUSIBLE = {"T": FIELD, "V": VOLTAGE}
+# The units a spec usually writes an SI unit in, with their names, tried in order for the
+# advice of a plain number outside its plausible range.
+WRITTEN_UNITS = {
+    "m": (("mm", "millimetres"), ("um", "micrometres")),
+    "m^2": (("mm^2", "square millimetres"),),
+    "T": (("mT", "millitesla"), ("uT", "microtesla")),
+    "N": (("mN", "millinewtons"),),
+    "Pa": (("kPa", "kilopascals"), ("MPa", "megapascals")),
+    "s": (("ms", "milliseconds"),),
+    "V": (("mV", "millivolts"),),
+    "rad": (("deg", "degrees"),),
+    "1/K": (("%/K", "percent per kelvin"), ("ppm/K", "ppm per kelvin")),
+    "m/N": (("mm/N", "millimetres per newton"), ("um/N", "micrometres per newton")),
+    "T/N": (("mT/N", "millitesla per newton"), ("uT/N", "microtesla per newton")),
+    "V/N": (("mV/N", "millivolts per newton"),),
+}
+# Plausible magnitudes of a plain SI number given for an output (a target's value, a limit's
+# bound), by the output's SI unit: a compliance of 0.32 is 0.32 m/N, a field_max of 4.8 is 4.8 T.
+OUTPUT_PLAUSIBLE = {
+    "m": LENGTH,
+    "m^2": AREA,
+    "T": FIELD,
+    "N": FORCE,
+    "V": VOLTAGE,
+    "s": TIME,
+    "rad": ANGLE,
+    "m/N": (0.0, 0.01),
+    "T/N": (0.0, 10.0),
+    "V/N": (0.0, 100.0),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Key:
+    """One spec key.
+
+    Attributes:
+        name: the dotted key, ``table.key``.
+        kind: its type (a key of :data:`KINDS`).
+        meaning: what it sets, in one line.
+        unit: the SI unit of a quantity ("1": dimensionless; :data:`READING`: the reading's
+            unit, T or V); "" for keys that are not quantities.
+        default: the value (SI) when the key is absent; :data:`REQUIRED`; None for "absent
+            (the feature is off)"; or :class:`Depends`.
+        domain: the physical domain of a number (see :data:`POSITIVE`), or None.
+        plausible: (low, high), the plausible magnitudes of a plain SI number (a dict by
+            unit for a reading), or None.
+        real_parts: (highest, why): a value above ``highest`` (SI, with or without a unit)
+            is far outside real parts and warns; or None.
+        choices: {name: meaning} of a choice, a list of names or a preset.
+        presets: {name: factory} of the parts a preset names (the factory returns the part).
+        length: the number of items of a list, or None (any).
+    """
+
+    name: str
+    kind: str
+    meaning: str
+    unit: str = ""
+    default: object = REQUIRED
+    domain: tuple | None = None
+    plausible: tuple | Mapping | None = None
+    real_parts: tuple | None = None
+    choices: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    presets: Mapping[str, Callable] = dataclasses.field(default_factory=dict)
+    length: int | None = None
+
+    @property
+    def table(self) -> str:
+        """The table the key sits in ("mechanics", "design.variables.*")."""
+        return self.name.rpartition(".")[0]
+
+    @property
+    def field(self) -> str:
+        """The key's name inside its table ("thickness")."""
+        return self.name.rpartition(".")[2]
+
+    def plausible_range(self, unit: str) -> tuple | None:
+        """(low, high) of a plain number read in ``unit``, or None."""
+        return self.plausible.get(unit) if isinstance(self.plausible, Mapping) else self.plausible
+
+
+_NDFEB = (1.6, "the strongest permanent magnets (NdFeB) reach about 1.5 T")
+_EFFECTS = {
+    "temperature_drift": "the magnet's remanence drifts with temperature (temperature_coefficient, temperature_change)",
+    "placement": "every sensor placed off its nominal position (placement)",
+    "chip_tilt": "every chip tilted off its nominal orientation (tilt)",
+    "viscoelastic_lag": "the elastomer follows the load with a first-order lag (lag_time_constant)",
+    "area_averaging": "each chip reads the field averaged over its active area (area, quadrature)",
+    "background": "a uniform background field is added (background)",
+    "saturation": "each reading clips at the chip's range (saturation_limit)",
+    "noise": "Gaussian noise on each reading (noise)",
+    "quantisation": "each reading rounded to the converter's step (lsb)",
+}
+_SENSOR_PRESETS = {
+    "AK8963": ("hall3d: AKM AK8963 3-axis Hall sensor, 16-bit output", ak8963),
+    "MLX90393": ("hall3d: Melexis MLX90393 3-axis Hall sensor at its finest setting", mlx90393),
+    "INESC": ("spin_valve: INESC-MN chip of six spin valves in series", inesc_spin_valve),
+    "PANASONIC": ("spin_valve, gmr: Panasonic GMR meander at a 0.6 V bias", panasonic_meander),
+    "AA003-02": ("gmr: NVE AA003-02 GMR bridge at a 5 V supply", nve_aa003),
+}
+_POSE = {
+    "aligned": "every chip's axes along the scene's x, y, z",
+    "radial": "each chip's sensitive axis along the outward radius from the scene's axis",
+}
+
+
+def _keys():
+    q, R, D = "quantity", REQUIRED, Depends
+    return [
+        # [scene]: the effects of the reading chain and their options
+        Key(
+            "scene.effects",
+            "names",
+            "the effects the measurement chain applies, in the chain's order",
+            default=[],
+            choices=_EFFECTS,
+        ),
+        Key(
+            "scene.temperature_coefficient",
+            q,
+            "the reversible temperature coefficient of the remanence",
+            "1/K",
+            -0.12e-2,
+            plausible=(0.0, 0.1),
+        ),
+        Key(
+            "scene.temperature_change",
+            q,
+            "the magnet's temperature change from where its remanence is given",
+            "K",
+            10.0,
+            plausible=(0.0, 500.0),
+        ),
+        Key(
+            "scene.placement",
+            "quantities",
+            "each sensor's offset from its nominal position (x, y, z)",
+            "m",
+            [200e-6, 0.0, 0.0],
+            plausible=LENGTH,
+            length=3,
+        ),
+        Key(
+            "scene.tilt",
+            "quantities",
+            "each chip's tilt angles (alpha, beta, gamma) after its nominal rotation",
+            "rad",
+            [10.0 * deg, 0.0, 0.0],
+            plausible=ANGLE,
+            length=3,
+        ),
+        Key(
+            "scene.lag_time_constant",
+            q,
+            "the elastomer's first-order lag time constant",
+            "s",
+            D("0.505 s, the dome-Hall paper's identified lag (100 Hz pole 0.9804)"),
+            POSITIVE,
+            TIME,
+        ),
+        Key(
+            "scene.area",
+            "quantities",
+            "a chip's active area, width along its a axis and height along b",
+            "m",
+            [200e-6, 95e-6],
+            POSITIVE,
+            LENGTH,
+            length=2,
+        ),
+        Key("scene.quadrature", "integer", "quadrature points per side of the active area", default=3),
+        Key(
+            "scene.background",
+            "quantities",
+            "the uniform background field (x, y, z), scene frame",
+            "T",
+            [0.0, 0.0, 50e-6],
+            plausible=FIELD,
+            length=3,
+        ),
+        Key(
+            "scene.saturation_limit",
+            q,
+            "where a reading clips (each axis)",
+            READING,
+            D("the chip's full scale (a preset's range; the 2.048 V ADC for spin valves and GMRs)"),
+            POSITIVE,
+            READING_PLAUSIBLE,
+        ),
+        Key(
+            "scene.noise",
+            q,
+            "the standard deviation of the noise on each reading",
+            READING,
+            D("one LSB for a Hall chip; 3.4 uV (the 24-bit ADC's) for spin valves and GMRs"),
+            NONNEGATIVE,
+            READING_PLAUSIBLE,
+        ),
+        Key(
+            "scene.lsb",
+            q,
+            "the quantisation step of each reading",
+            READING,
+            D("the chip's LSB; 2.048 V / 2^23 for spin valves and GMRs"),
+            POSITIVE,
+            READING_PLAUSIBLE,
+        ),
+        # [magnet]
+        Key(
+            "magnet.shape",
+            "choice",
+            "the permanent magnet, which picks the kind of scene",
+            choices={
+                "cylinder": "an axially magnetised cylinder over point sensors",
+                "film": "a sinusoidally magnetised film over a grid of Hall chips",
+                "plate": "a magnet plate under a soft pole in a ball (magnetic suspension)",
+            },
+        ),
+        Key("magnet.radius", q, "the cylinder's or plate's radius", "m", R, POSITIVE, LENGTH),
+        Key("magnet.height", q, "the cylinder's height or the plate's thickness", "m", R, POSITIVE, LENGTH),
+        Key(
+            "magnet.remanence",
+            q,
+            "the remanence (polarisation J = mu0 M) along the magnet's axis",
+            "T",
+            R,
+            POSITIVE,
+            FIELD,
+            _NDFEB,
+        ),
+        Key(
+            "magnet.fidelity",
+            "choice",
+            "the cylinder's field model",
+            default="exact",
+            choices={
+                "exact": "the exact field everywhere",
+                "dipole": "the far-field dipole",
+                "axis": "the closed form on the axis (every sensor on the axis)",
+            },
+        ),
+        Key(
+            "magnet.direction", "quantities", "the polarisation's direction (x, y, z), normalised", "1", None, length=3
+        ),
+        Key(
+            "magnet.offset",
+            "quantities",
+            "the magnet's offset (x, y, z) from its place on the axis",
+            "m",
+            None,
+            plausible=LENGTH,
+            length=3,
+        ),
+        Key(
+            "magnet.rotation",
+            "quantities",
+            "the magnet's rotation angles (x, y, z)",
+            "rad",
+            None,
+            plausible=ANGLE,
+            length=3,
+        ),
+        Key("magnet.extra", "tables", "further cylinder magnets, [[magnet.extra]]", default=[]),
+        Key("magnet.period", q, "the film's magnetisation period", "m", R, POSITIVE, LENGTH),
+        Key("magnet.thickness", q, "the film's thickness", "m", R, POSITIVE, LENGTH),
+        Key("magnet.magnetization", q, "the film's polarisation amplitude J0", "T", R, POSITIVE, FIELD, _NDFEB),
+        Key("magnet.periods", "integer", "the film's width in periods (absent: an infinite film)", default=None),
+        # [[magnet.extra]]
+        Key("magnet.extra.radius", q, "this magnet's radius", "m", R, POSITIVE, LENGTH),
+        Key("magnet.extra.height", q, "this magnet's height", "m", R, POSITIVE, LENGTH),
+        Key(
+            "magnet.extra.polarization",
+            "quantities",
+            "this magnet's polarisation (x, y, z), its own frame",
+            "T",
+            R,
+            plausible=FIELD,
+            length=3,
+        ),
+        Key(
+            "magnet.extra.position",
+            "quantities",
+            "this magnet's centre (x, y, z), scene frame",
+            "m",
+            R,
+            plausible=LENGTH,
+            length=3,
+        ),
+        Key(
+            "magnet.extra.rotation",
+            "quantities",
+            "this magnet's rotation angles (x, y, z)",
+            "rad",
+            [0.0, 0.0, 0.0],
+            plausible=ANGLE,
+            length=3,
+        ),
+        Key("magnet.extra.moves", "bool", "whether this magnet moves with the main one", default=True),
+        # [mechanics]
+        Key(
+            "mechanics.model",
+            "choice",
+            "what carries the magnet",
+            choices={
+                "dome": "a hemispherical elastomer dome pressed by a flat plate",
+                "layer": "a uniform elastomer layer",
+                "tilt": "a ball on a torsion spring (the pole scene)",
+            },
+        ),
+        Key("mechanics.outer_radius", q, "the dome's outer radius", "m", R, POSITIVE, LENGTH),
+        Key("mechanics.thickness", q, "the dome's wall or the layer's thickness", "m", R, POSITIVE, LENGTH),
+        Key("mechanics.contact_area", q, "the layer's loaded area", "m^2", R, POSITIVE, AREA),
+        Key(
+            "mechanics.fidelity",
+            "choice",
+            "the mechanics model's level",
+            default=D("reissner for a dome, hooke for a layer"),
+            choices={
+                "reissner": "dome: Reissner's thin-shell closed form",
+                "axisymmetric": "dome: the finite-strain axisymmetric model",
+                "hooke": "layer: Hooke's law over the contact area",
+                "bonded": "layer: Hooke's law corrected for a bonded, nearly incompressible layer",
+            },
+        ),
+        Key(
+            "mechanics.base",
+            "choice",
+            "how the dome's rim is held",
+            default="bonded",
+            choices={"bonded": "glued to the base", "sliding": "free to slide on the base"},
+        ),
+        Key(
+            "mechanics.material",
+            "choice",
+            "the elastomer's constitutive law",
+            choices={
+                "mooney_rivlin": "Mooney-Rivlin (c10, c01)",
+                "neo_hookean": "neo-Hookean (shear_modulus, bulk_modulus)",
+                "linear": "linear elastic (youngs_modulus, poisson_ratio)",
+            },
+        ),
+        Key("mechanics.c10", q, "Mooney-Rivlin constant C10", "Pa", R, POSITIVE, MODULUS),
+        Key("mechanics.c01", q, "Mooney-Rivlin constant C01", "Pa", R, NONNEGATIVE, MODULUS),
+        Key("mechanics.shear_modulus", q, "neo-Hookean shear modulus mu", "Pa", R, POSITIVE, MODULUS),
+        Key("mechanics.bulk_modulus", q, "neo-Hookean bulk modulus K", "Pa", R, POSITIVE, MODULUS),
+        Key("mechanics.youngs_modulus", q, "linear Young's modulus E", "Pa", R, POSITIVE, MODULUS),
+        Key("mechanics.poisson_ratio", q, "linear Poisson's ratio nu", "1", R, (-1.0, False, 0.5, False)),
+        Key(
+            "mechanics.spring",
+            q,
+            "the ball's torsion spring: restoring force per radian of tilt",
+            "N/rad",
+            R,
+            POSITIVE,
+            (1e-9, 1e3),
+        ),
+        # [sensor]
+        Key(
+            "sensor.model",
+            "choice",
+            "the kind of magnetic sensor",
+            choices={
+                "hall3d": "3-axis Hall chips",
+                "spin_valve": "spin-valve chips, one sensitive axis each",
+                "gmr": "GMR bridges read differentially",
+            },
+        ),
+        Key(
+            "sensor.preset",
+            "choice",
+            "the sensor part",
+            choices={n: m for n, (m, _) in _SENSOR_PRESETS.items()},
+            presets={n: f for n, (_, f) in _SENSOR_PRESETS.items()},
+        ),
+        Key(
+            "sensor.grid",
+            "integers",
+            "a grid of sensors, [rows, columns], centred on the axis",
+            default=[1, 1],
+            length=2,
+        ),
+        Key(
+            "sensor.pitch", q, "the grid's spacing", "m", D("required with a grid; 0 for a film's"), NONNEGATIVE, LENGTH
+        ),
+        Key("sensor.depth", q, "how far the grid lies below the sensor plane", "m", 0.0, plausible=LENGTH),
+        Key(
+            "sensor.positions",
+            "points",
+            "each sensor's position [x, y, z] (absent: one sensor at the origin)",
+            "m",
+            None,
+            plausible=LENGTH,
+        ),
+        Key("sensor.orientation", "choice", "how the chips are turned", default="aligned", choices=_POSE),
+        Key("sensor.amplification", q, "the voltage gain after the spin valve or bridge", "1", 1.0, POSITIVE),
+        Key("sensor.offset", q, "the GMR's offset along x from the pole's axis", "m", R, plausible=LENGTH),
+        Key("sensor.height", q, "the GMR's height above the magnet plate", "m", R, NONNEGATIVE, LENGTH),
+        # [geometry]
+        Key(
+            "geometry.gap",
+            q,
+            "the rest distance from the magnet's face (or the ball's bottom) to the sensor plane (or plate)",
+            "m",
+            R,
+            POSITIVE,
+            LENGTH,
+        ),
+        # [load]
+        Key("load.points", "integer", "the number of load points of the sweep", default=11),
+        Key(
+            "load.normal",
+            "quantities",
+            "the normal force [start, stop], ramped linearly",
+            "N",
+            None,
+            plausible=FORCE,
+            length=2,
+        ),
+        Key(
+            "load.shear_x", "quantities", "the shear force along x [start, stop]", "N", None, plausible=FORCE, length=2
+        ),
+        Key(
+            "load.shear_y", "quantities", "the shear force along y [start, stop]", "N", None, plausible=FORCE, length=2
+        ),
+        Key(
+            "load.contact_x", "quantities", "the contact point's x [start, stop]", "m", None, plausible=LENGTH, length=2
+        ),
+        Key(
+            "load.contact_y", "quantities", "the contact point's y [start, stop]", "m", None, plausible=LENGTH, length=2
+        ),
+        Key(
+            "load.duration",
+            q,
+            "the sweep's duration",
+            "s",
+            D("one second per point (a quasi-static sweep)"),
+            plausible=TIME,
+        ),
+        # [inductors]
+        Key("inductors.positions", "points", "each chip inductor's position [x, y, z]", "m", R, plausible=LENGTH),
+        Key("inductors.area", q, "the mean area of one turn", "m^2", R, POSITIVE, AREA),
+        Key("inductors.turns", q, "the number of turns", "1", R, POSITIVE),
+        Key("inductors.amplification", q, "the voltage gain of the EMF", "1", 1.0, POSITIVE),
+        Key(
+            "inductors.noise",
+            q,
+            "the standard deviation of the noise on each EMF reading",
+            "V",
+            0.0,
+            NONNEGATIVE,
+            VOLTAGE,
+        ),
+        Key("inductors.window", "integer", "the window of samples an event is counted over", default=20),
+        # [pole]
+        Key("pole.ball_radius", q, "the ball's radius", "m", R, POSITIVE, LENGTH),
+        Key("pole.diameter", q, "the soft rod's diameter", "m", R, POSITIVE, LENGTH),
+        Key(
+            "pole.length", q, "the rod's length from the ball's bottom", "m", D("the ball's diameter"), POSITIVE, LENGTH
+        ),
+        Key(
+            "pole.fidelity",
+            "choice",
+            "the pole's magnetic model",
+            default="reduced",
+            choices={
+                "reduced": "a charge model with a demagnetizing factor",
+                "moments": "the rod in cells, its magnetisation solved self-consistently",
+            },
+        ),
+        Key(
+            "pole.demagnetizing_factor", q, "the rod's demagnetizing factor (reduced)", "1", R, (0.0, False, 1.0, True)
+        ),
+        Key("pole.permeability", q, "the rod's relative permeability (moments)", "1", 1000.0, POSITIVE),
+        Key(
+            "pole.saturation",
+            q,
+            "the rod's saturation polarisation (moments; absent: linear)",
+            "T",
+            None,
+            POSITIVE,
+            FIELD,
+        ),
+        Key("pole.cells", "integer", "the rod's cells along its length (moments)", default=16),
+        # [[soft]]
+        Key(
+            "soft.shape",
+            "choice",
+            "the soft part's shape",
+            choices={
+                "cuboid": "size = [x, y, z]",
+                "cylinder": "size = [diameter, height]",
+                "sphere": "size = diameter",
+            },
+        ),
+        Key(
+            "soft.size",
+            "quantities",
+            "the part's size (see shape); one quantity for a sphere",
+            "m",
+            R,
+            POSITIVE,
+            LENGTH,
+        ),
+        Key("soft.permeability", q, "the part's relative permeability", "1", R, POSITIVE),
+        Key("soft.saturation", q, "the part's saturation polarisation (absent: linear)", "T", None, POSITIVE, FIELD),
+        Key("soft.cells", "integer", "cells along the part's longest side", default=8),
+        Key(
+            "soft.position",
+            "quantities",
+            "the part's centre (x, y, z), scene frame",
+            "m",
+            R,
+            plausible=LENGTH,
+            length=3,
+        ),
+        Key(
+            "soft.rotation",
+            "quantities",
+            "the part's rotation angles (x, y, z)",
+            "rad",
+            [0.0, 0.0, 0.0],
+            plausible=ANGLE,
+            length=3,
+        ),
+        Key("soft.moves", "bool", "whether the part moves with the magnet", default=False),
+        # [design.*]: * is a scene parameter (dotted spec key) or an output's name
+        Key("design.name", "text", "the design's name, shown above its report", default=D("the spec file's name")),
+        Key("design.variables.*.lower", q, "the parameter's lowest value", "the parameter's unit"),
+        Key("design.variables.*.upper", q, "the parameter's highest value", "the parameter's unit"),
+        Key(
+            "design.variables.*.start",
+            q,
+            "where the solve starts, only for a parameter the scene does not state (a start that differs "
+            "from the scene's stated value is refused: the variable starts at that value)",
+            "the parameter's unit",
+            D("the scene's value"),
+        ),
+        Key(
+            "design.variables.*.scale",
+            q,
+            "the solver's unit step of the parameter",
+            "the parameter's unit",
+            D("upper - lower"),
+        ),
+        Key("design.targets.*", "quantity or table", "an output held equal to this value", "the output's unit", None),
+        Key("design.targets.*.value", q, "the target value", "the output's unit"),
+        Key(
+            "design.targets.*.scale",
+            q,
+            "the size a miss is judged by",
+            "the output's unit",
+            D("|value|; needed for a target of 0"),
+        ),
+        Key(
+            "design.targets.*.tolerance",
+            q,
+            'the allowed miss of a tolerance analysis\'s samples ("%" of the value)',
+            "the output's unit",
+            None,
+        ),
+        Key("design.limits.*.lower", q, "the output's lowest allowed value", "the output's unit", None),
+        Key("design.limits.*.upper", q, "the output's highest allowed value", "the output's unit", None),
+        Key(
+            "design.limits.*.scale",
+            q,
+            "the size a violation is judged by",
+            "the output's unit",
+            D("the bound's magnitude"),
+        ),
+        Key("design.objective.maximize", "output", "the output to maximise", default=None),
+        Key("design.objective.minimize", "output", "the output to minimise", default=None),
+        Key("design.report.*", "unit", "a further output to show, in this unit", default=None),
+        Key(
+            "design.tolerances.distribution",
+            "choice",
+            "the distribution of every tolerance",
+            default="normal",
+            choices={"normal": "sizes are standard deviations", "uniform": "sizes are half-widths"},
+        ),
+        Key(
+            "design.tolerances.*",
+            "quantity or table",
+            'a scene parameter\'s tolerance ("%" of its value, or a quantity in its unit)',
+            "the parameter's unit",
+            None,
+        ),
+        Key("design.tolerances.*.value", q, "the tolerance's size", "the parameter's unit"),
+        Key(
+            "design.tolerances.*.distribution",
+            "choice",
+            "this tolerance's own distribution",
+            default=D("design.tolerances.distribution"),
+            choices={"normal": "a standard deviation", "uniform": "a half-width"},
+        ),
+        Key(
+            "design.tolerances.placement",
+            "quantities",
+            "each sensor's placement tolerance (one quantity or x, y, z)",
+            "m",
+            None,
+            NONNEGATIVE,
+            LENGTH,
+            length=3,
+        ),
+        Key(
+            "design.tolerances.tilt",
+            "quantities",
+            "each chip's tilt tolerance (one quantity or alpha, beta, gamma)",
+            "rad",
+            None,
+            NONNEGATIVE,
+            ANGLE,
+            length=3,
+        ),
+        Key(
+            "design.tolerances.temperature",
+            q,
+            "the magnet's temperature tolerance",
+            "K",
+            None,
+            NONNEGATIVE,
+            (0.0, 500.0),
+        ),
+    ]
+
+
+KEYS: dict[str, Key] = {key.name: key for key in _keys()}
+
+# The tables in the order the reference shows them: the scene's, then the design's.
+TABLES = tuple(dict.fromkeys(key.table for key in KEYS.values()))
+
+
+class UnlistedKeyError(LookupError):
+    """Code reads a spec key that the key table does not list, or reads it otherwise than
+    the table says (type, unit, default, choices): a programming error, not a bad spec."""
+
+
+class PlausibilityWarning(UserWarning):
+    """A spec value that is allowed but far outside real parts, or a plain number (SI) far
+    outside its key's plausible range."""
+
+
+_INDEX = re.compile(r"\[\d+\]")
+# Kinds read by one reader: a [[soft]] part's size is one quantity for a sphere, a list else.
+_FAMILY = {"quantities": "quantity", "quantity or table": "quantity"}
+
+
+def spec_name(name: str) -> str:
+    """The table's name of a key as code names it: "soft[0].size[1]" -> "soft.size",
+    "magnet.extra[2].radius" -> "magnet.extra.radius"."""
+    return _INDEX.sub("", name)
+
+
+# The sets :func:`recording` collects looked-up keys into, while it runs.
+_RECORDS: list[set[str]] = []
+
+
+@contextlib.contextmanager
+def recording():
+    """Collect the names of the keys the readers look up inside the block (a set): the
+    tests' check that every key of the table is read by some reader."""
+    names: set[str] = set()
+    _RECORDS.append(names)
+    try:
+        yield names
+    finally:
+        _RECORDS.remove(names)
+
+
+def listed(name: str) -> Key:
+    """The :class:`Key` of ``name`` (see :func:`spec_name`); UnlistedKeyError if the table
+    does not list it."""
+    key = KEYS.get(spec_name(name))
+    if key is None:
+        raise UnlistedKeyError(f"{name}: read as a spec key, but magdesign.spec.keys does not list it")
+    return key
+
+
+def lookup(name: str, kind: str | None = None) -> Key:
+    """The :class:`Key` of ``name`` that a reader reads (:func:`listed`, and noted by any
+    :func:`recording`); UnlistedKeyError if the table lists it with another kind than ``kind``."""
+    key = listed(name)
+    for names in _RECORDS:
+        names.add(key.name)
+    if kind is not None and _FAMILY.get(key.kind, key.kind) != _FAMILY.get(kind, kind):
+        raise UnlistedKeyError(f"{name}: read as {kind}, but magdesign.spec.keys lists it as {key.kind}")
+    return key
+
+
+def fields(table: str) -> tuple[str, ...]:
+    """The keys of spec table ``table`` ("design.variables.*" -> ("lower", "upper", ...))."""
+    names = tuple(key.field for key in KEYS.values() if key.table == table)
+    if not names:
+        raise UnlistedKeyError(f"{table}: read as a spec table, but magdesign.spec.keys lists no key in it")
+    return names
+
+
+def check_read(key: Key, *, unit: str | None = None, default=REQUIRED, options=None) -> None:
+    """UnlistedKeyError unless a reader reads ``key`` as the table says: in ``unit`` (one of
+    the key's units), with ``default`` (:data:`REQUIRED` where it passes none) equal to the
+    table's, and offering ``options`` that the table lists among its choices."""
+    if unit is not None and unit not in key.unit.split(" or "):
+        raise UnlistedKeyError(f"{key.name}: read in {unit}, but magdesign.spec.keys gives its unit as {key.unit}")
+    if not isinstance(key.default, Depends) and not _same(default, key.default):
+        raise UnlistedKeyError(
+            f"{key.name}: read with the default {default!r}, but magdesign.spec.keys gives {key.default!r}"
+        )
+    if options is not None and not set(options) <= set(key.choices):
+        extra = sorted(set(options) - set(key.choices))
+        raise UnlistedKeyError(f"{key.name}: offers {extra}, which magdesign.spec.keys does not list")
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, float) or isinstance(b, float):
+        return isinstance(a, (int, float)) and isinstance(b, (int, float)) and math.isclose(a, b, rel_tol=1e-12)
+    return a is b or (type(a) is type(b) and a == b)
+
+
+def domain_text(domain: tuple) -> str:
+    """A domain (see :data:`POSITIVE`) as an interval: "(0, inf)", "[0, inf)", "(-1, 0.5)"."""
+    low, low_ok, high, high_ok = domain
+    left = "(-inf" if low is None else ("[" if low_ok else "(") + f"{low:g}"
+    right = "inf)" if high is None else f"{high:g}" + ("]" if high_ok else ")")
+    return f"{left}, {right}"
+
+
+def check_domain(name: str, value: float, *, key: str | None = None, unit: str = "", written=None) -> None:
+    """Check one number read for scene key ``name`` (SI ``value``, read in ``unit``).
+
+    Raises a SpecError naming ``key`` (default ``name``) unless ``value`` lies in the key's
+    physical domain. Warns (:class:`PlausibilityWarning`) where ``written``, the value as
+    the spec wrote it, is a plain number outside the key's plausible range (it is read in
+    SI: the warning says so and which unit was likely meant), or where the value is far
+    outside real parts.
+    """
+    key = key or name
+    entry = listed(name)
+    if entry.domain is not None:
+        low, low_ok, high, high_ok = entry.domain
+        below = low is not None and (value < low or (value == low and not low_ok))
+        above = high is not None and (value > high or (value == high and not high_ok))
+        if below or above:
+            raise SpecError(
+                f"{key}: {value:g} {unit or '(SI)'} is not physical; expected a value in {domain_text(entry.domain)}"
+            )
+    if _plain(written) and unit not in ("", "1"):
+        message = _plain_advice(entry.plausible_range(unit), key, written, unit)
+        if message:
+            warnings.warn(message, PlausibilityWarning, stacklevel=3)
+            return
+    if entry.real_parts is not None and abs(value) > entry.real_parts[0]:
+        warnings.warn(
+            f"{key}: {value:g} {entry.unit} is far outside real parts ({entry.real_parts[1]})",
+            PlausibilityWarning,
+            stacklevel=3,
+        )
+
+
+def _plain(written) -> bool:
+    return isinstance(written, (int, float)) and not isinstance(written, bool)
+
+
+def check_output_number(key: str, written, unit: str) -> None:
+    """Warn (:class:`PlausibilityWarning`) where ``written``, a target's value or a limit's
+    bound as the spec wrote it for an output in SI ``unit``, is a plain number outside that
+    unit's plausible range (:data:`OUTPUT_PLAUSIBLE`): it is read in SI."""
+    if _plain(written) and unit not in ("", "1"):
+        message = _plain_advice(OUTPUT_PLAUSIBLE.get(unit), key, written, unit)
+        if message:
+            warnings.warn(message, PlausibilityWarning, stacklevel=3)
+
+
+def _plain_advice(plausible, key, written, unit):
+    """The warning for a plain number ``written`` (SI, read in ``unit``) outside the
+    ``plausible`` range (low, high), or None when it lies inside (or no range is known)."""
+    if plausible is None:
+        return None
+    low, high = plausible
+    size = abs(float(written))
+    if size <= high and (size == 0.0 or size >= low):
+        return None
+    number = f"{written:g}"
+    for written_unit, words in WRITTEN_UNITS.get(unit, ()):
+        si = size * unit_factor(written_unit) / unit_factor(unit)
+        if low <= si <= high:
+            return f'{key} = {number} was read as {number} {unit}; write "{number} {written_unit}" for {words}'
+    return (
+        f"{key} = {number} was read as {number} {unit}, outside the plausible {low:g} to {high:g} {unit}; "
+        "a plain number is SI"
+    )
