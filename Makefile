@@ -3,7 +3,9 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench studies clean
+DOCS_STAMP := $(VENV)/.installed-docs
+
+.PHONY: demo test lint bench studies docs clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
@@ -16,11 +18,24 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q -n 2
 
+# ruff: lint and format, as configured in pyproject.toml
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+
+$(DOCS_STAMP): pyproject.toml $(STAMP)
+	$(PY) -m pip install --quiet --disable-pip-version-check -e '.[docs]'
+	touch $(DOCS_STAMP)
+
+# the site, built offline into site/ (mkdocs.yml: strict, so a warning fails it)
+docs: $(DOCS_STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
+
 bench: $(STAMP)
 	for f in benchmarks/*.py; do $(PY) $$f || exit 1; done
 
 studies: $(STAMP)
-	for f in studies/seed*.py; do $(PY) $$f || exit 1; done
+	for f in studies/[!_]*.py; do $(PY) $$f || exit 1; done
 
 clean:
-	rm -rf $(VENV) studies/out
+	rm -rf $(VENV) studies/out site
