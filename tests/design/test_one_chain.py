@@ -53,15 +53,19 @@ def _magnet_measures(sim, parameters, scene):
     gap = parameters.get("geometry.gap", float(scene.gap))
     mechanics = scene.mechanics
     thickness = parameters.get("mechanics.thickness", float(mechanics.thickness))
+    height = parameters.get("magnet.height", float(scene.height))
     if hasattr(mechanics, "outer_radius"):  # a dome bottoms out at its inner height
         room = parameters.get("mechanics.outer_radius", float(mechanics.outer_radius)) - thickness
         summit = room + thickness  # the dome's outer apex
+        floor = room  # the inner apex: below it the cavity
     else:  # a layer when pressed to nothing
         room = summit = thickness  # its top face
+        floor = 0.0  # solid down to the sensor plane
     ideal = chip if scene.reading_unit == "T" else np.asarray(scene.transducer(sim.chip_field))[..., None]
     return {
         "travel_fraction": np.max(-uz) / room,
         "embed": summit - gap,
+        "reach": gap + height - floor,
         "saturation_ratio": np.max(np.abs(ideal) / _chip_range(scene)),
         "compliance": (uz[0] - uz[top]) / press,
         "closest_gap": gap + uz.min(),
