@@ -80,8 +80,8 @@ def check_carried(gap, height, mechanics):
     sensor plane, ``height`` (m) tall) touches the part that carries it (to
     :data:`CONTACT_RTOL`): on or in a layer (gap <= its thickness), or at a dome's apex (its
     near face at or below the outer apex, its far face at or above the inner apex)."""
+    top, bottom = float(mechanics.top()), float(mechanics.bottom())  # the guards' embed and reach
     if isinstance(mechanics, Layer):
-        top = float(mechanics.thickness)
         if gap > top * (1.0 + CONTACT_RTOL):
             raise SpecError(
                 f"geometry.gap: a magnet whose face is {gap * 1e3:g} mm above the chips floats above the "
@@ -89,12 +89,11 @@ def check_carried(gap, height, mechanics):
                 "layer's thickness (the magnet on or in the layer)"
             )
     if isinstance(mechanics, Dome):
-        outer, inner = float(mechanics.outer_radius), float(mechanics.outer_radius - mechanics.thickness)
-        if not (inner * (1.0 - CONTACT_RTOL) <= gap + height and gap <= outer * (1.0 + CONTACT_RTOL)):
+        if not (bottom * (1.0 - CONTACT_RTOL) <= gap + height and gap <= top * (1.0 + CONTACT_RTOL)):
             raise SpecError(
                 f"geometry.gap: a {height * 1e3:g} mm magnet whose face is {gap * 1e3:g} mm above the chips "
-                f"misses the apex of the dome that carries it (its wall spans {inner * 1e3:g} to "
-                f"{outer * 1e3:g} mm); expected a gap from {(inner - height) * 1e3:g} to {outer * 1e3:g} mm"
+                f"misses the apex of the dome that carries it (its wall spans {bottom * 1e3:g} to "
+                f"{top * 1e3:g} mm); expected a gap from {(bottom - height) * 1e3:g} to {top * 1e3:g} mm"
             )
 
 
