@@ -1,12 +1,18 @@
 import os
+from pathlib import Path
 
 import jax
 import pytest
 
-# The command's persistent compilation cache stays out of the tests (tests/test_cli.py
-# checks it with its own folder).
-os.environ.setdefault("MAGDESIGN_NO_CACHE", "1")
+from magdesign.cli import use_compilation_cache
+
+# One persistent compilation cache for the tests, in the repository's .pytest_cache (never
+# the user's): the xdist workers, each module after clear_caches below and the commands the
+# tests start load the programs that another one compiled. tests/test_cli.py checks the
+# cache itself with folders of its own.
+os.environ.setdefault("MAGDESIGN_CACHE_DIR", str(Path(__file__).resolve().parent.parent / ".pytest_cache" / "jax"))
 jax.config.update("jax_enable_x64", True)
+use_compilation_cache()
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -15,3 +21,15 @@ def _drop_compiled_programs_after_each_module():
     they add up to several GB in one test worker."""
     yield
     jax.clear_caches()
+
+
+# Whole modules in the slow tier (`make test-all`): each runs studies, builds the site's
+# code blocks or installs the wheel, minutes apiece. Single slow tests carry the marker.
+SLOW_MODULES = ("tests/studies/", "tests/test_docs.py", "tests/test_installed.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    root = Path(__file__).resolve().parent.parent
+    for item in items:
+        if Path(item.fspath).resolve().relative_to(root).as_posix().startswith(SLOW_MODULES):
+            item.add_marker(pytest.mark.slow)
