@@ -40,16 +40,13 @@ def traced_once(fn):
     return call
 
 
-# XLA's older CPU code generator: on the default design it compiles the design solver in
-# 2.4 s where it took 4.7 s with the fusion emitters (per-kernel MLIR pipelines), and the
-# compiled solve runs in 0.60 ms instead of 0.70 ms (jaxlib 0.9.2, 2 cores; the solver's
-# jitted core lowered and compiled apart). A dome's own calls gain less (the axisymmetric
-# 5 N compliance's first call 7.2 s against 7.9 s) and keep XLA's defaults.
+# XLA's older CPU code generator: it compiles the design solver in about half the time of
+# the fusion emitters (per-kernel MLIR pipelines), and the compiled solve runs faster too.
+# A dome's own calls gain little from it and keep XLA's defaults.
 # XLA's loop-invariant code motion is off: it runs on every while loop at each round of
 # XLA's simplification passes, and the solver's loops hold little invariant work that it
-# could hoist (the one-trip loops of where_needed keep theirs on purpose). Without it the
-# default design compiled in 1.8-1.9 s against 2.4-2.5 s and the axisymmetric one in 14 s
-# against 21 s, and the warm solves ran as fast (2026-11-28, same hour).
+# could hoist (the one-trip loops of where_needed keep theirs on purpose), so it costs a
+# quarter to a third of the compile time and saves nothing at run time.
 _COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_disable_hlo_passes": "while-loop-invariant-code-motion"}
 
 

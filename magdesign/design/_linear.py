@@ -37,9 +37,9 @@ class LUOrSVD(lx.AbstractLinearSolver):
         del options
         # linearised first: a Jacobian operator's matrix is then its linear map pushed
         # along the basis (vmap batches the tangent's program alone), where as_matrix()
-        # batched the function whole, the model inside it included, as JAX batches a
-        # jitted call even where none of its inputs is batched (the axisymmetric design's
-        # trace took 2.7 s longer); the same matrix
+        # would batch the function whole, the model inside it included, as JAX batches a
+        # jitted call even where none of its inputs is batched (seconds more of tracing
+        # for an axisymmetric design); the matrix is the same
         matrix = lx.linearise(operator).as_matrix()
         if jnp.iscomplexobj(matrix):
             raise TypeError("LUOrSVD solves real systems only")

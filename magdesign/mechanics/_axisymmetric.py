@@ -92,9 +92,8 @@ ARMIJO = 0.25
 # Index of the largest Levenberg shift tried (each ten times the previous one; see _factor).
 LEVENBERG_MAX = 12
 # Path following: steps at most, and the Newton iterations at or below which a step doubles
-# and from which on it halves. (At 16, the dome-Hall sensor's dome kept a first step that took 15
-# iterations, and the next, as long, failed after PATH_NEWTON_MAX_ITER: 142 iterations for
-# its 11 load levels, against 119 at 12.)
+# and from which on it halves. A step that needed many iterations is not repeated at the same
+# length: the next one, as long, is likely to fail after PATH_NEWTON_MAX_ITER.
 PATH_MAX_STEPS = 80
 PATH_EASY_ITER = 8
 PATH_HARD_ITER = 12
@@ -782,8 +781,8 @@ def first_crossings(mesh, params, levels, max_travel, step):
         y, ok, iterations, H, reaction, shift = newton(mesh, mask, held, force, params, guess, max_iter, path.shift)
         just = jnp.arange(k) == level
         # A solved level's state, inside the step, is a closer lower end for the levels
-        # still pending above it: their Hermite guesses span less of the step (on the
-        # dome-Hall sensor's dome the lightest levels took 12 iterations each from the whole first step).
+        # still pending above it: their Hermite guesses span less of the step, and each
+        # level needs fewer Newton iterations than from the step's start.
         still = pending & ~just
         above = jnp.all(jnp.where(still, levels >= levels[level], True))
         closer = solving & ok & jnp.any(still) & above & (y[-1] > before.y[-1]) & (y[-1] < path.y[-1])

@@ -14,10 +14,8 @@ core, the two solutions agreeing to 1.2e-14 relative (benchmarks/mechanics.py).
 
 The tangent is assembled straight into these blocks (:class:`Blocks`, by gathers:
 :func:`summing_tables`), never as the dense matrix, which on the default mesh is eight
-times larger: the dome-Hall sensor's dome followed to 5 N (10 levels) went from 93 to 77 ms, and a
-batch of 100 tangents from 0.54 to 0.30 ms each (2-core development machine), where the
-dense matrix was assembled by XLA's scatter-add, a serial loop on CPU, and a batch of
-dense matrices left the cache.
+times larger: XLA assembles a dense matrix by scatter-add, a serial loop on CPU, and a
+batch of dense matrices leaves the cache.
 """
 
 import equinox as eqx
