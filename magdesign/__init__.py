@@ -17,3 +17,17 @@ from magdesign import transducers as transducers  # noqa: E402
 from magdesign import units as units  # noqa: E402
 
 __version__ = importlib.metadata.version("magdesign")  # from the installed distribution's metadata
+
+# The heavier subpackages load on first use (``magdesign.scene.to_magpylib`` works after a
+# plain ``import magdesign``), so that importing the package stays as quick as its kernels.
+_LAZY_SUBPACKAGES = ("accuracy", "design", "inverse", "scene", "spec")
+
+
+def __getattr__(name):
+    if name in _LAZY_SUBPACKAGES:
+        return importlib.import_module(f"magdesign.{name}")
+    raise AttributeError(f"module 'magdesign' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY_SUBPACKAGES))

@@ -75,6 +75,10 @@ CLIP_RTOL = 1e-6
 # Designs solved per compiled batch of a sweep: bounds its memory (the Reissner-level default
 # design takes about 1 kB per point) while keeping the per-call overhead small.
 DESIGN_CHUNK = 4096
+# A sweep of up to DESIGN_CHUNK * DESIGN_PROGRESS_STEPS points goes in at least about this many
+# chunks (sizes a power of two), so that its progress bar moves and Ctrl-C, which takes effect
+# between chunks, stops it soon; a vmapped lane's answer does not depend on its chunk's size.
+DESIGN_PROGRESS_STEPS = 16
 # Values that spread by less than this fraction of their size are one number up to rounding:
 # reports and pictures show the number, not its noise (sweep maps, tolerance histograms).
 ROUNDING_SPREAD = 1e-9

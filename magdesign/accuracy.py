@@ -49,6 +49,7 @@ import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
 
+from magdesign._progress import say, stage
 from magdesign.design import solve
 from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.fields import cylinder, film, soft
@@ -69,7 +70,7 @@ POLE_CELLS = (24, 8, 12, 16)  # the first is the reference
 
 DOME_HALL_MAGNET = dict(radius=1.5 * mm, height=1 * mm, polarization=1.17)
 SPIN_VALVE_MAGNET = dict(radius=0.5 * mm, height=1 * mm, polarization=1.3)
-FILM_HALL_FILM = dict(period=6 * mm, thickness=0.5 * mm, magnetization=0.085)
+FILM_HALL_FILM = dict(period=6 * mm, thickness=0.5 * mm, polarization=0.085)
 DOME_HALL_RESIN = MooneyRivlin(c10=0.1182e6, c01=0.1769e6)
 # The magnetic-suspension sensor's scene without its pole's level (the levels are measured):
 # a Ni-Fe rod through a 4 mm ball 0.4 mm above a magnet plate. The spring coefficient reads
@@ -230,6 +231,7 @@ def measure_dome(quick=False):
     levels = [("reissner", None)] + [("axisymmetric", mesh) for mesh in meshes]
     values, seconds = {}, {}
     for fidelity, mesh in levels:
+        stage(f"dome compliance at {fidelity}{'' if mesh is None else f' {mesh[0]}x{mesh[1]}'}")
         fn = compliance(fidelity, mesh)
         values[fidelity, mesh] = np.array([float(fn(t)) for t in thicknesses])
         seconds[fidelity, mesh] = _warm_seconds(fn, thicknesses[1], quick=quick)
@@ -254,7 +256,7 @@ def measure_soft(quick=False):
     exact = 3.0 * 999.0 / 1002.0 * float(field[2]) / MU0
     solve_soft = jax.jit(soft.magnetization)
     for cells in QUICK_SOFT_SPHERE_CELLS if quick else SOFT_SPHERE_CELLS:
-        body = soft.soft_body("sphere", 2 * mm, cells=cells, permeability=1000.0)
+        body = soft.soft_body("sphere", radius=1 * mm, cells=cells, permeability=1000.0)
         external = jnp.broadcast_to(field, (len(body.index), 3))
         error = abs(float(jnp.mean(solve_soft(body, external)[:, 2])) / exact - 1)
         rows.append(
@@ -269,7 +271,7 @@ def measure_soft(quick=False):
         )
     applied, saturated = 1.0, _saturated_sphere(299.0, 2.2, 1.0)  # Fe in 1 T
     for cells in QUICK_SATURATED_SPHERE_CELLS if quick else SATURATED_SPHERE_CELLS:
-        body = soft.soft_body("sphere", 2 * mm, cells=cells, permeability=300.0, saturation=2.2)
+        body = soft.soft_body("sphere", radius=1 * mm, cells=cells, permeability=300.0, saturation=2.2)
         external = jnp.broadcast_to(jnp.array([0.0, 0.0, applied]), (len(body.index), 3))
         error = abs(MU0 * float(jnp.mean(solve_soft(body, external)[:, 2])) / saturated - 1)
         rows.append(
@@ -292,6 +294,7 @@ def measure_pole():
     levels.append(("reduced", dict(fidelity="reduced", demagnetizing_factor=0.1)))
     values, seconds, rows = {}, {}, []
     for name, level in levels:
+        stage(f"suspension pole spring at {name}")
         # the reduced level takes a demagnetizing factor in place of a permeability
         pole = {
             k: v for k, v in SUSPENSION_POLE["pole"].items() if level["fidelity"] == "moments" or k != "permeability"
@@ -331,6 +334,7 @@ def measure_default_design():
     """The decision: how far the default design moves between dome levels, and its cost."""
     solved = {}
     for fidelity in ("reissner", "axisymmetric"):
+        stage(f"default design solved at {fidelity}")
         problem, _ = problem_from_spec(default_spec(), fidelity=fidelity)
         solve(problem)  # compile
         result = solve(problem)
@@ -364,15 +368,25 @@ MEASUREMENTS = (
 
 
 def measure(progress=None, quick=False) -> list[Row]:
-    """Measure every model (``quick``: the cheaper tier, see the module's docstring);
-    ``progress`` (a text stream) is told which one runs."""
+    """Measure every model (``quick``: the cheaper tier, see the module's docstring).
+    ``progress`` (a text stream; default: the command's progress lines, see
+    :mod:`magdesign._progress`) is told which one runs ("measuring dome compliance (5 of 6)
+    ...") and then each row it measured, with its error and time."""
+
+    def tell(text):
+        if progress is None:
+            say(text)
+        else:
+            print(text, file=progress, flush=True)
+
     rows = []
-    for name, fn, in_quick_tier in MEASUREMENTS:
-        if quick and not in_quick_tier:
-            continue
-        if progress is not None:
-            print(f"measuring {name} ...", file=progress, flush=True)
-        rows.extend(fn(quick=True) if quick else fn())
+    chosen = [(name, fn) for name, fn, in_quick_tier in MEASUREMENTS if in_quick_tier or not quick]
+    for number, (name, fn) in enumerate(chosen, start=1):
+        tell(f"measuring {name} ({number} of {len(chosen)}) ...")
+        measured = fn(quick=True) if quick else fn()
+        for row in measured:
+            tell(f"{row.model}, {row.fidelity}: error {_error(row)}, {_seconds(row.seconds)} per {row.cases}")
+        rows.extend(measured)
     return rows
 
 
@@ -381,9 +395,12 @@ def table(rows) -> str:
     width = max([24] + [len(row.model) + 2 for row in rows])
     lines = [f"{'model':<{width}}{'fidelity':<22}{'error':>14}{'time':>14}  per", "-" * (width + 62)]
     for row in rows:
-        error = f"{row.error / um:.3g} um" if row.unit == "m" else f"{row.error:.2e}"
-        lines.append(f"{row.model:<{width}}{row.fidelity:<22}{error:>14}{_seconds(row.seconds):>14}  {row.cases}")
+        lines.append(f"{row.model:<{width}}{row.fidelity:<22}{_error(row):>14}{_seconds(row.seconds):>14}  {row.cases}")
     return "\n".join(lines)
+
+
+def _error(row):
+    return f"{row.error / um:.3g} um" if row.unit == "m" else f"{row.error:.2e}"
 
 
 def _seconds(value):

@@ -10,9 +10,15 @@
         [--coordinator HOST:PORT --num-processes N --process-id I | --distributed]
 
 Exit codes: 0 done (solve: solved), 1 internal error (a bug: one line; ``--debug`` shows
-the traceback), 2 bad spec or arguments (one line naming the key), 3 solve not successful
-(the status and the violated target are printed) or a simulation whose mechanics did not
-converge at some load point.
+the traceback) or a stdout that cannot be written (a full disk), 2 bad spec or arguments
+(one line naming the key), 3 solve not successful (the status and the violated target are
+printed) or a simulation whose mechanics did not converge at some load point, 130
+interrupted (Ctrl-C), 141 stdout closed by its reader (``| head -1``). Each error is one
+line on stderr.
+
+Progress goes to stderr, one line per stage ("magdesign solve: confirming at the exact
+levels ..."), and "wrote FILE" for each file written; a bar, on a terminal only, moves per
+point of a sweep. ``--quiet`` silences both; errors and warnings still print.
 
 Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax/<this CPU>; see
 :func:`cache_directory`; MAGDESIGN_NO_CACHE=1 turns it off).
@@ -34,12 +40,14 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from magdesign import accuracy
+from magdesign import _progress, accuracy
+from magdesign._progress import stage, wrote
 from magdesign.design import solve as solve_problem
 from magdesign.design import sweep as sweep_problem
 from magdesign.design import tolerance as tolerance_analysis
 from magdesign.design.plot import plot_design, plot_sweep
 from magdesign.design.report import format_quantity
+from magdesign.design.solve import usable_cores
 from magdesign.design.spec import (
     default_spec,
     exact_levels,
@@ -60,14 +68,19 @@ from magdesign.scene import (
 from magdesign.scene.core import warn_if_clipping
 from magdesign.scene.picture import plot_scene
 from magdesign.spec.keys import KEYS, check_domain, spec_name
+from magdesign.spec.sizes import check_fits
 from magdesign.units import SpecError, parse, written_unit
 
 EXIT_INTERNAL = 1
 EXIT_BAD_SPEC = 2
 EXIT_NOT_SOLVED = 3
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl-C
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, as a shell reports a writer whose reader left
 # Programs that took longer than this to compile are kept in the persistent cache (JAX's own
 # JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS, when set, wins).
 CACHE_MIN_COMPILE_SECONDS = 0.5
+# Said where a solve starts: a fresh process traces and compiles the solver first.
+FIRST_CALL = "the first call compiles the model, up to minutes at the exact levels; later runs load it from the cache"
 
 
 def cpu_tag():
@@ -121,13 +134,18 @@ def build_parser():
         prog="magdesign",
         parents=[debug],
         description="Design magnetic tactile sensors by differentiable optimisation.",
-        epilog="Exit codes: 0 done, 1 internal error, 2 bad spec or arguments, 3 not solved (or "
-        "mechanics not converged). Specs are TOML: every key, its unit, default and range is in "
+        epilog="Exit codes: 0 done, 1 internal error (or stdout not writable), 2 bad spec or arguments, "
+        "3 not solved (or mechanics not converged), 130 interrupted, 141 stdout closed by its reader. "
+        "Progress lines go to stderr (--quiet: none). Specs are TOML: every key, its unit, default and range is in "
         "the spec reference (`python -m magdesign.spec.reference` prints it; also in the docs).",
     )
     parser.add_argument("--version", action="version", version=f"magdesign {importlib.metadata.version('magdesign')}")
     sub = parser.add_subparsers(dest="command", required=True)
-    add_parser = lambda name, **kwargs: sub.add_parser(name, parents=[debug], **kwargs)  # noqa: E731
+    quiet = argparse.ArgumentParser(add_help=False)
+    quiet.add_argument(
+        "--quiet", action="store_true", help="no progress lines or bars on stderr (errors and warnings still print)"
+    )
+    add_parser = lambda name, **kwargs: sub.add_parser(name, parents=[debug, quiet], **kwargs)  # noqa: E731
 
     solve = add_parser("solve", help="solve a design spec (default: the soft dome with a Hall sensor)")
     solve.add_argument("spec", nargs="?", help="design spec (TOML); the built-in default design if omitted")
@@ -197,7 +215,6 @@ def build_parser():
     sweep_cmd.add_argument(
         "--fidelity", help="one mechanics level for every point (e.g. reissner, axisymmetric); default: the spec's"
     )
-    sweep_cmd.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep_cmd.add_argument(
         "--devices",
         type=int,
@@ -240,7 +257,6 @@ def build_parser():
         "sigmas of its output, and give that design's Monte Carlo beside the nominal one",
     )
     tolerance.add_argument("--seed", type=int, default=0, metavar="S", help="PRNG seed of the samples (default 0)")
-    tolerance.add_argument("--quiet", action="store_true", help="no progress bar or progress lines")
     return parser
 
 
@@ -257,8 +273,9 @@ def scene_at_start(spec):
 
 def run_show(args):
     spec = load_spec(args.spec)
+    stage(f"writing {args.plot}: the sensor at rest and at the largest load")
     plot_scene(scene_at_start(spec)[0], loads_from_spec(spec), args.plot, title=args.spec)
-    print(f"wrote {args.plot}")
+    wrote(args.plot)
     return 0
 
 
@@ -287,10 +304,8 @@ def run_solve(args):
     spec = load_spec(args.spec) if args.spec else default_spec()
     auto = args.fidelity in (None, "auto")
     problem, _ = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
-    levels = fidelity_levels(
-        spec if auto else {**spec, "mechanics": {**spec.get("mechanics", {}), "fidelity": args.fidelity}}
-    )
-    _progress(args, f"solving at {levels}")
+    levels = _levels_at(spec, None if auto else args.fidelity)
+    stage(f"solving at {levels} ({FIRST_CALL})")
     first = solve_problem(problem)
     answers = [(levels, problem, first)]
     exact = exact_levels(spec) if auto else None
@@ -301,13 +316,15 @@ def run_solve(args):
         # Confirm at the exact levels, from the cheap answer: a few steps of the costly model.
         exact_problem, _ = problem_from_spec(exact)
         confirming = fidelity_levels(exact)
-        _progress(args, f"confirming at {confirming}, from that answer")
+        stage(f"confirming at the exact levels, {confirming}, from that answer ({FIRST_CALL})")
         start = {
             v.name: min(max(first.parameters[v.name], float(v.lower)), float(v.upper)) for v in exact_problem.variables
         }
         confirmed = solve_problem(exact_problem, start=start)
         answers.append((confirming, exact_problem, confirmed))
     levels, problem, result = answers[-1]
+    if args.timing:
+        stage(f"--timing: solving again at {levels}, warm")
     warm = solve_problem(problem, start=start if exact else None) if args.timing else None
     if args.json:
         document = {**result.to_json(), "fidelity": levels, "objective": _objective(problem, result)}
@@ -335,8 +352,17 @@ def run_solve(args):
     if args.write:
         _write_answer(args, result)
     if args.plot:
+        stage(f"writing {args.plot}: each target and limit along each variable, at {levels}")
         plot_design(problem, result, args.plot)
+        wrote(args.plot)
     return 0 if result.status == "successful" else EXIT_NOT_SOLVED
+
+
+def _levels_at(spec, fidelity):
+    """The levels a run of ``spec`` with ``--fidelity`` (a mechanics level, or None) is at."""
+    if fidelity is not None:
+        spec = {**spec, "mechanics": {**spec.get("mechanics", {}), "fidelity": fidelity}}
+    return fidelity_levels(spec)
 
 
 def _write_answer(args, result):
@@ -349,13 +375,7 @@ def _write_answer(args, result):
         return
     except OSError as error:
         raise SpecError(f"--write {args.write}: cannot write ({error.strerror})") from None
-    print(f"wrote {args.write}", file=sys.stderr if args.json else sys.stdout)
-
-
-def _progress(args, message):
-    """A line on stderr before a solve (not with --json, whose reader wants one object)."""
-    if not args.json:
-        print(f"magdesign solve: {message} ...", file=sys.stderr, flush=True)
+    wrote(args.write)
 
 
 def _objective(problem, result):
@@ -384,8 +404,9 @@ def _start_devices(args):
     """Set up the devices a sweep runs on, before JAX starts: ``--devices N`` host devices,
     and jax.distributed for several processes (CPU collectives by gloo)."""
     if args.devices is not None:
-        if args.devices < 1:
-            raise SpecError(f"--devices {args.devices}: expected at least 1")
+        cores = usable_cores()
+        if not 1 <= args.devices <= cores:
+            raise SpecError(f"--devices {args.devices}: expected 1 to {cores}, the CPU cores this process may use")
         jax.config.update("jax_num_cpu_devices", args.devices)
     named = [args.coordinator, args.num_processes, args.process_id]
     if args.distributed or any(value is not None for value in named) or os.environ.get("JAX_COORDINATOR_ADDRESS"):
@@ -411,13 +432,18 @@ def _sweep_points(args, units):
 
     if args.points:
         try:
-            with open(args.points, newline="") as file:
+            with open(args.points, newline="", encoding="utf-8") as file:
                 rows = [row for row in csv.reader(file) if any(cell.strip() for cell in row)]
         except OSError as error:
             raise SpecError(f"--points {args.points}: cannot read ({error.strerror})") from None
+        except (UnicodeDecodeError, csv.Error):
+            raise SpecError(f"--points {args.points}: not a CSV text file (UTF-8)") from None
         if len(rows) < 2:
             raise SpecError(f"--points {args.points}: expected a header row of keys and at least one point")
         keys = [key.strip() for key in rows[0]]
+        twice = next((key for key in keys if keys.count(key) > 1), None)
+        if twice is not None:
+            raise SpecError(f"--points {args.points}: {twice} is swept twice (two columns of the header)")
         values = {key: [] for key in keys}
         for number, row in enumerate(rows[1:], start=2):
             if len(row) != len(keys):
@@ -447,6 +473,7 @@ def _sweep_points(args, units):
             raise SpecError(f"{where}: N must be at least 1, got {count}")
         if not low < high:
             raise SpecError(f"{where}: LO must be below HI")
+        check_fits(where, count, what="its values")  # the whole grid's records: the sweep checks them
         values[key] = np.linspace(low, high, count)
         shown[key] = written_unit(parts[0].strip()) or display
     return values, shown, True
@@ -479,12 +506,15 @@ def run_sweep(args):
     values, shown, grid = _sweep_points(args, input_units(spec, problem, scene))
     if args.plot and len(values) > 2:
         raise SpecError("--plot: a picture shows 1 or 2 swept keys (curves or maps)")
+    count = math.prod(len(v) for v in values.values()) if grid else len(next(iter(values.values())))
+    levels = _levels_at(spec, args.fidelity)
+    stage(f"solving {count} point{'s' if count != 1 else ''}{' at ' + levels if levels else ''}")
     try:
         result = sweep_problem(
             problem,
             values,
             grid=grid,
-            progress=False if args.quiet or args.json else None,
+            progress=False if args.quiet else None,
             over_units={k: None if u == "1" else u for k, u in shown.items()},
         )
     except ValueError as error:
@@ -493,6 +523,7 @@ def run_sweep(args):
         return 0 if result.successful.all() else EXIT_NOT_SOLVED
     if args.csv:
         result.write_csv(args.csv)
+        wrote(args.csv)
     if args.json:
         print(
             json_text(
@@ -512,7 +543,9 @@ def run_sweep(args):
             print(result.table())
         print(f"magdesign sweep: {result.summary()}" + (f"; every point written to {args.csv}" if args.csv else ""))
     if args.plot:
+        stage(f"writing {args.plot}")
         plot_sweep(result, args.plot)
+        wrote(args.plot)
     return 0 if result.successful.all() else EXIT_NOT_SOLVED
 
 
@@ -520,6 +553,8 @@ def run_simulate(args):
     spec = load_spec(args.spec)
     scene, start = scene_at_start(spec)
     loads = loads_from_spec(spec)
+    levels = fidelity_levels(spec)
+    stage(f"simulating the load sweep{' at ' + levels if levels else ''} ({FIRST_CALL})")
     result = simulate(scene, loads, key=jax.random.key(0))
     warn_if_clipping(scene, result)
     # the outputs read no reading after the reading effects: the noisy simulation gives them too
@@ -554,14 +589,13 @@ def run_tolerance(args):
         raise SpecError(f"--samples: expected a positive number of samples, got {args.samples}")
     if args.robust is not None and not (math.isfinite(args.robust) and args.robust > 0):
         raise SpecError(f"--robust: expected a number of sigmas K > 0, got {args.robust:g}")
+    if not 0 <= args.seed < 2**63:  # jax.random.key takes a 64-bit signed integer
+        raise SpecError(f"--seed {args.seed}: expected a whole number from 0 to 2**63 - 1")
     spec = load_spec(args.spec)
     tp = tolerance_analysis.tolerance_problem_from_spec(spec)
+    # the samples' outputs are kept (samples x outputs float64), twice while they are joined
+    check_fits(f"--samples {args.samples}", args.samples * len(tp.problem.outputs), factor=2, what="its outputs")
     levels = fidelity_levels(spec)
-    quiet = args.json or args.quiet
-
-    def note(message):
-        if not quiet:
-            print(f"magdesign tolerance: {message} ...", file=sys.stderr, flush=True)
 
     def analyse(result, what):
         if not result.successful:
@@ -569,16 +603,16 @@ def run_tolerance(args):
                 f"magdesign tolerance: the {what} solve ended {result.status}: analysing its end point anyway",
                 file=sys.stderr,
             )
-        note(f"Monte Carlo of the {what} design, {args.samples} samples")
+        stage(f"Monte Carlo of the {what} design, {args.samples} samples")
         return tolerance_analysis.monte_carlo(
             tp, result.parameters, samples=args.samples, seed=args.seed, progress=False if args.quiet else None
         )
 
-    note(f"solving at {levels}")
+    stage(f"solving at {levels} ({FIRST_CALL})")
     nominal = solve_problem(tp.problem)
     runs = [("nominal", nominal, analyse(nominal, "nominal"))]
     if args.robust is not None:
-        note(f"solving with every limit held at {args.robust:g} sigma (first order)")
+        stage(f"solving with every limit held at {args.robust:g} sigma (first order)")
         robust = tolerance_analysis.robust_solve(tp, args.robust, start=nominal.parameters)
         runs.append(("robust", robust, analyse(robust, "robust")))
     if args.json:
@@ -607,17 +641,21 @@ def run_tolerance(args):
                 )
             )
     if args.plot:
+        stage(f"writing {args.plot}")
         tolerance_analysis.plot_tolerance(
             runs[0][2], args.plot, robust=runs[1][2] if len(runs) > 1 else None, title=Path(args.spec).name
         )
+        wrote(args.plot)
     return 0 if all(result.successful for _, result, _ in runs) else EXIT_NOT_SOLVED
 
 
 def run_accuracy(args):
-    rows = accuracy.measure(progress=None if args.json else sys.stderr, quick=args.quick)
+    rows = accuracy.measure(quick=args.quick)
     print(json_text([row._asdict() for row in rows]) if args.json else accuracy.table(rows))
     if args.plot:
+        stage(f"writing {args.plot}")
         accuracy.plot(rows, args.plot)
+        wrote(args.plot)
     return 0
 
 
@@ -638,27 +676,89 @@ def json_text(value) -> str:
 
 
 def check_output_path(path, option="--plot", suffix=".png"):
-    """SpecError unless ``path`` is a file that can be written (checked before any solve,
-    so that a long run does not end in an error): a name ending in ``suffix`` in an
-    existing, writable folder, and not a folder itself."""
+    """SpecError unless ``path`` is a file that can be written (checked before any work, so
+    that a long run does not end in an error): a name ending in ``suffix``, no longer than
+    its folder's file system takes, in an existing folder, and not a folder itself. The
+    write is tried: a new file is made and removed at once, an existing one opened to append
+    (unchanged), since permissions alone do not tell (root may "write" in /proc and /sys)."""
     target = Path(path)
     folder = target.parent
+    try:
+        longest = os.pathconf(folder, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        longest = 255
+    if len(os.fsencode(target.name)) > longest:
+        raise SpecError(f"{option}: a file name of {len(os.fsencode(target.name))} bytes; at most {longest} there")
     if target.is_dir():
         raise SpecError(f"{option} {path}: a folder; give the path of the {suffix} file to write")
     if target.suffix.lower() != suffix:
         raise SpecError(f"{option} {path}: give a file name ending in {suffix}")
     if not folder.is_dir():
         raise SpecError(f"{option} {path}: no folder {folder}")
-    if not os.access(folder, os.W_OK) or (target.exists() and not os.access(target, os.W_OK)):
-        raise SpecError(f"{option} {path}: cannot write there")
+    if target.exists() and not target.is_file():
+        raise SpecError(f"{option} {path}: not a regular file")
+    try:
+        if target.exists():
+            with open(target, "ab"):
+                pass
+        else:
+            with open(target, "xb"):
+                pass
+            target.unlink()
+    except OSError as error:
+        raise SpecError(f"{option} {path}: cannot write there ({error.strerror})") from None
 
 
 def _fail(args, code, kind, message):
-    """One line on stderr; with --json also one JSON object on stdout (its reader wants one)."""
+    """One line on stderr; with --json also one JSON object on stdout (its reader wants one,
+    if it is still there)."""
     print(f"magdesign {args.command}: {message}", file=sys.stderr)
     if getattr(args, "json", False):
-        print(json_text({"error": kind, "message": message, "exit_code": code}))
+        try:
+            print(json_text({"error": kind, "message": message, "exit_code": code}), flush=True)
+        except (OSError, _StdoutFailed):
+            _drop_stdout()
     return code
+
+
+def _drop_stdout():
+    """Send what is left for stdout to the null device, so that Python's last flush at exit
+    does not fail again on a closed or full stdout."""
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # a stdout without a file descriptor (a test's capture)
+        pass
+
+
+class _StdoutFailed(Exception):
+    """A write to stdout failed (``error``: a closed pipe, a full disk), told apart from
+    the failures of other files."""
+
+    def __init__(self, error):
+        super().__init__(str(error))
+        self.error = error
+
+
+class _Stdout:
+    """``stream`` (sys.stdout) whose write errors raise :class:`_StdoutFailed`."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except OSError as error:
+            raise _StdoutFailed(error) from None
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except OSError as error:
+            raise _StdoutFailed(error) from None
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None):
@@ -678,6 +778,8 @@ def main(argv=None):
         "sweep": run_sweep,
         "tolerance": run_tolerance,
     }[args.command]
+    _progress.enable(None if args.quiet else f"magdesign {args.command}")
+    stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
     try:
         if getattr(args, "plot", None):
             check_output_path(args.plot)
@@ -685,14 +787,21 @@ def main(argv=None):
             check_output_path(args.csv, "--csv", ".csv")
         if getattr(args, "write", None):
             check_output_path(args.write, "--write", ".toml")
-        return command(args)
+        code = command(args)
+        sys.stdout.flush()  # a full or closed stdout fails here, not in Python's flush at exit
+        return code
     except SpecError as error:
         return _fail(args, EXIT_BAD_SPEC, "bad_spec", str(error))
-    except BrokenPipeError:
-        # The reader went away (``magdesign simulate ... | head -1``): stop quietly, and keep
-        # Python's final flush of stdout from failing again.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
+    except KeyboardInterrupt:
+        # Ctrl-C: one line, the shell's code for SIGINT; files are written only after the work
+        return _fail(args, EXIT_INTERRUPTED, "interrupted", "interrupted")
+    except _StdoutFailed as failed:
+        _drop_stdout()
+        if isinstance(failed.error, BrokenPipeError):  # the reader left (``magdesign ... | head -1``)
+            print(f"magdesign {args.command}: stdout closed by its reader; output cut short", file=sys.stderr)
+            return EXIT_BROKEN_PIPE
+        print(f"magdesign {args.command}: cannot write to stdout ({failed.error.strerror})", file=sys.stderr)
+        return EXIT_INTERNAL
     except Exception as error:
         if getattr(args, "debug", False):
             raise
@@ -703,6 +812,9 @@ def main(argv=None):
             "internal_error",
             f"internal error: {type(error).__name__}: {first_line} (run with --debug for the traceback)",
         )
+    finally:
+        _progress.enable(None)
+        sys.stdout = stdout
 
 
 if __name__ == "__main__":

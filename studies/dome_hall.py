@@ -33,7 +33,7 @@ from _report import Report, arguments, number, progress  # noqa: E402
 import magdesign  # noqa: E402,F401  (turns on float64)
 from magdesign.design import solve  # noqa: E402
 from magdesign.design.spec import default_spec, exact_levels, fidelity_levels, problem_from_spec  # noqa: E402
-from magdesign.fields import cylinder, cylinder_on_axis  # noqa: E402
+from magdesign.fields import cylinder, cylinder_axial  # noqa: E402
 from magdesign.inverse import InverseStatus, displacement_grid, invert_displacement  # noqa: E402
 from magdesign.mechanics import MooneyRivlin, dome_compliance, dome_curve, lag_pole, time_constant_from_pole  # noqa: E402
 from magdesign.scene import Loads, scene_from_spec, simulate  # noqa: E402
@@ -98,20 +98,26 @@ def on_axis(z, fidelity="exact"):
     return cylinder(points, radius=RADIUS, height=HEIGHT, polarization=REMANENCE, fidelity=fidelity)[..., 2]
 
 
+def eq1(z):
+    """Eq. 1, the closed form of B_z (T) on the axis, z (m) above the top face (the paper's
+    coordinate; ``fields.cylinder_axial`` measures from the magnet's centre)."""
+    return cylinder_axial(HEIGHT / 2 + z, radius=RADIUS, height=HEIGHT, polarization=REMANENCE)
+
+
 def saturation_distance(report):
     """Part 1: where the on-axis field falls to the AK8963's 4.8 mT."""
     progress("saturation distance")
-    closed_form = jax.jit(lambda z: cylinder_on_axis(z, radius=RADIUS, height=HEIGHT, remanence=REMANENCE))
+    closed_form = jax.jit(eq1)
     exact_field = jax.jit(on_axis)
     dipole_field = jax.jit(lambda z: on_axis(z, "dipole"))
     closed, exact, dipole = (
         bisect(lambda z: float(f(z)) - SATURATION, 1 * mm, 20 * mm) for f in (closed_form, exact_field, dipole_field)
     )
-    at_six = float(cylinder_on_axis(PAPER_SATURATION_DISTANCE, radius=RADIUS, height=HEIGHT, remanence=REMANENCE))
-    at_margin = float(cylinder_on_axis(PAPER_MARGIN, radius=RADIUS, height=HEIGHT, remanence=REMANENCE))
+    at_six = float(eq1(PAPER_SATURATION_DISTANCE))
+    at_margin = float(eq1(PAPER_MARGIN))
     z = np.linspace(2 * mm, 12 * mm, 201)
     curves = {
-        "Eq. 1 (closed form)": np.asarray(cylinder_on_axis(z, radius=RADIUS, height=HEIGHT, remanence=REMANENCE)),
+        "Eq. 1 (closed form)": np.asarray(eq1(z)),
         "exact cylinder field": np.asarray(on_axis(z)),
         "dipole": np.asarray(on_axis(z, "dipole")),
     }
@@ -666,7 +672,7 @@ def write_sections(report, sat, dome, des, lag, inv, quick):
     report.heading("1. Saturation distance")
     report.text(
         "Where the on-axis field of the N35 magnet falls to the AK8963's 4.8 mT, found by bisection on "
-        "`fields.cylinder_on_axis` (Eq. 1) and on `fields.cylinder` (exact, elliptic integrals) at the axis; "
+        "`fields.cylinder_axial` (Eq. 1) and on `fields.cylinder` (exact, elliptic integrals) at the axis; "
         "the dipole level for scale."
     )
     report.table(

@@ -137,7 +137,7 @@ def finite_magnitude(periods):
     """|B| (T, per tesla of J0) at depths z (a float or an array) below the centre of a film
     ``periods`` wide."""
     field = jax.jit(
-        lambda z: jnp.hypot(*film(0.0, z, period=PERIOD, thickness=FILM_THICKNESS, magnetization=1.0, periods=periods))
+        lambda z: jnp.hypot(*film(0.0, z, period=PERIOD, thickness=FILM_THICKNESS, polarization=1.0, periods=periods))
     )
     return lambda z: float(field(z)) if np.ndim(z) == 0 else np.asarray(field(jnp.asarray(z)))
 
@@ -160,7 +160,7 @@ def attenuation():
     progress("attenuation distances")
     infinite = {
         a: attenuation_distance(
-            a, lambda z: float(film_magnitude(z, period=PERIOD, thickness=FILM_THICKNESS, magnetization=1.0))
+            a, lambda z: float(film_magnitude(z, period=PERIOD, thickness=FILM_THICKNESS, polarization=1.0))
         )
         for a in ATTENUATION
     }
@@ -275,7 +275,7 @@ def decoupling(spec):
 def attenuation_figure(report, strips):
     z = np.linspace(0, 6 * mm, 200)
     fig, ax = plt.subplots(figsize=(6, 4))
-    infinite = np.asarray(film_magnitude(z, period=PERIOD, thickness=FILM_THICKNESS, magnetization=1.0))
+    infinite = np.asarray(film_magnitude(z, period=PERIOD, thickness=FILM_THICKNESS, polarization=1.0))
     ax.semilogy(z / mm, infinite / infinite[0], label="infinite film (closed form)")
     for periods in strips:
         magnitude = finite_magnitude(periods)
@@ -547,7 +547,7 @@ def main(argv=None):
     k = 2 * math.pi / PERIOD
     ours = float(
         film_magnitude(
-            LAYER_THICKNESS, period=PERIOD, thickness=FILM_THICKNESS, magnetization=float(scene.magnetization)
+            LAYER_THICKNESS, period=PERIOD, thickness=FILM_THICKNESS, polarization=float(scene.magnetization)
         )
     )
     printed = float(scene.magnetization) * math.expm1(k * FILM_THICKNESS) * math.exp(-k * LAYER_THICKNESS)

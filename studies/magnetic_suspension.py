@@ -146,7 +146,8 @@ def soleplate(p, lengths):
     pair at +-HALL_X_NIFE reads the rod's and the plate's B_z."""
     plate = soft.soft_body(
         "cylinder",
-        [2 * p["magnet.radius"], p["magnet.height"]],
+        radius=p["magnet.radius"],
+        height=p["magnet.height"],
         cells=SOLEPLATE_CELLS,
         permeability=p["pole.permeability"],
     )
@@ -265,7 +266,7 @@ def planar_stiffness(p, depths):
     def restoring(theta, depth):
         body = soft.soft_body(
             "cuboid",
-            jnp.stack([p["pole.diameter"], depth, p["pole.length"]]),
+            dimension=jnp.stack([p["pole.diameter"], depth, p["pole.length"]]),
             cells=PLANAR_GRID,
             permeability=p["pole.permeability"],
         )

@@ -66,12 +66,14 @@ def test_solve_table_and_plot(capsys, tmp_path):
         )
         == 0
     )
-    out = capsys.readouterr().out
+    captured = capsys.readouterr()
+    out = captured.out
     lines = out.splitlines()
     assert lines[0] == "dome_hall: cylinder magnet, mooney_rivlin dome, AK8963 hall3d chip"
     assert "geometry.gap" in out and "successful" in out
     assert any(line.split()[:2] == ["maximize", "sensitivity"] for line in lines)
-    assert any(line.startswith("total time: ") for line in lines) and f"wrote {written}" in lines
+    assert any(line.startswith("total time: ") for line in lines)
+    assert {f"magdesign solve: wrote {written}", f"magdesign solve: wrote {plot}"} <= set(captured.err.splitlines())
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     spec = tomllib.loads(written.read_text())
     gap = float(spec["geometry"]["gap"].removesuffix(" mm"))
@@ -191,7 +193,7 @@ def test_simulate_flags_load_points_where_the_dome_did_not_converge(tmp_path, ca
 def test_show_writes_a_picture(capsys, tmp_path):
     plot = tmp_path / "sensor.png"
     assert main(["show", str(EXAMPLES / "spin_valve_matrix.toml"), "--plot", str(plot)]) == 0
-    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and str(plot) in capsys.readouterr().out
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"magdesign show: wrote {plot}" in capsys.readouterr().err
 
 
 def test_show_needs_a_plot_file_and_a_good_spec(capsys, tmp_path):
@@ -244,19 +246,9 @@ def test_an_internal_error_is_one_line_and_exit_1_and_debug_shows_it(monkeypatch
             main(argv)
 
 
-def test_version_and_a_closed_pipe():
+def test_version():
     version = subprocess.run([sys.executable, "-m", "magdesign", "--version"], capture_output=True, text=True)
     assert version.returncode == 0 and version.stdout.startswith("magdesign ")
-    # simulate | head -1: the reader leaves after one line; no traceback.
-    simulate = subprocess.Popen(
-        [sys.executable, "-m", "magdesign", "simulate", str(EXAMPLES / "dome_hall.toml")],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-    )
-    simulate.stdout.readline()
-    simulate.stdout.close()
-    err = simulate.stderr.read().decode()
-    assert simulate.wait() == 0 and "Traceback" not in err, err
 
 
 @pytest.mark.parametrize(

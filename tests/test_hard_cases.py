@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 
-from magdesign.fields import cylinder, cylinder_on_axis, film, film_angle, film_magnitude
+from magdesign.fields import cylinder, cylinder_axial, film, film_angle, film_magnitude
 from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, dome_compliance, layer_stiffness
 from magdesign.transducers import soft_clip
 
@@ -108,7 +108,7 @@ def test_cylinder_on_the_axis_equals_the_closed_form(radius, aspect, height_over
     height = aspect * radius
     z = height / 2 + height_over_radius * radius
     exact = cylinder(jnp.array([0.0, 0.0, z]), radius=radius, height=height, polarization=1.3)
-    closed = cylinder_on_axis(z - height / 2, radius=radius, height=height, remanence=1.3)
+    closed = cylinder_axial(z, radius=radius, height=height, polarization=1.3)
     assert float(exact[2]) == pytest.approx(float(closed), rel=1e-13)
     assert float(exact[0]) == 0.0 and float(exact[1]) == 0.0
 
@@ -116,10 +116,10 @@ def test_cylinder_on_the_axis_equals_the_closed_form(radius, aspect, height_over
 @jax.jit
 def _film_with_gradients(x, z, period):
     def angle(x, z):
-        return film_angle(*film(x, z, period=period, thickness=0.5e-3, magnetization=0.05))
+        return film_angle(*film(x, z, period=period, thickness=0.5e-3, polarization=0.05))
 
     def magnitude(z):
-        return film_magnitude(z, period=period, thickness=0.5e-3, magnetization=0.05)
+        return film_magnitude(z, period=period, thickness=0.5e-3, polarization=0.05)
 
     return angle(x, z), jax.grad(angle, argnums=(0, 1))(x, z), magnitude(z), jax.grad(magnitude)(z)
 
@@ -135,7 +135,7 @@ def test_film_is_finite_for_large_kz_and_any_kx(period, kz, kx):
 def test_film_angle_is_exactly_quarter_turn_where_bz_vanishes():
     period = 6e-3
     for sign in (1.0, -1.0):
-        bx, bz = film(sign * period / 4, 1e-3, period=period, thickness=0.5e-3, magnetization=0.05)
+        bx, bz = film(sign * period / 4, 1e-3, period=period, thickness=0.5e-3, polarization=0.05)
         assert float(film_angle(bx, bz)) == sign * np.pi / 2
 
 
@@ -251,9 +251,9 @@ def test_float32_thin_magnet_derivatives_and_traced_height_stay_float32():
 
 
 def test_float32_on_axis_keeps_its_documented_tolerance():
-    z = np.geomspace(1e-6, 1.0, 500)
-    exact = np.asarray(cylinder_on_axis(jnp.asarray(z), radius=1.5e-3, height=1e-3, remanence=1.17))
-    single = cylinder_on_axis(jnp.asarray(z, jnp.float32), radius=1.5e-3, height=1e-3, remanence=1.17)
+    z = 0.5e-3 + np.geomspace(1e-6, 1.0, 500)  # from the magnet's centre: 1 um to 1 m above its top face
+    exact = np.asarray(cylinder_axial(jnp.asarray(z), radius=1.5e-3, height=1e-3, polarization=1.17))
+    single = cylinder_axial(jnp.asarray(z, jnp.float32), radius=1.5e-3, height=1e-3, polarization=1.17)
     assert single.dtype == jnp.float32
     assert np.max(np.abs(np.asarray(single, np.float64) - exact) / np.abs(exact)) < FLOAT32_AXIS_RTOL
 

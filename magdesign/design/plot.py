@@ -7,6 +7,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from magdesign._numerics import ROUNDING_SPREAD
+from magdesign._progress import stage
 from magdesign.scene import MECHANICS_CONVERGED
 from magdesign.units import convert
 
@@ -32,6 +33,7 @@ def plot_design(problem, result, path):
     figure = Figure(figsize=(4.2 * len(problem.variables), 2.8 * len(rows)))
     axes = figure.subplots(len(rows), len(problem.variables), squeeze=False)
     for column, variable in enumerate(problem.variables):
+        stage(f"{path}: the model at {SLICE_POINTS} values of {variable.name} over its bounds")
         grid = jnp.linspace(variable.lower, variable.upper, SLICE_POINTS)
         sliced = jax.vmap(lambda x: problem.model({**solution, variable.name: x}))(grid)
         x_unit = result.units.get(variable.name)

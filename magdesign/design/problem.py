@@ -223,6 +223,22 @@ class Problem(eqx.Module):
         return tuple((i, side) for i, lim in enumerate(self.limits) for side in lim.sides)
 
 
+def check_outputs(problem: Problem, outputs) -> None:
+    """Raise a ValueError, naming the output and the rule, unless the model's return
+    ``outputs`` is a dict that holds every output ``problem`` reads, each a scalar. Shapes
+    are static, so this holds while the model is traced too."""
+    if not isinstance(outputs, Mapping):
+        got = f"an array of shape {outputs.shape}" if hasattr(outputs, "shape") else f"a {type(outputs).__name__}"
+        raise ValueError(f"model: the model must return a dict of scalar outputs {{name: value (SI)}}, got {got}")
+    missing = [name for name in problem.outputs if name not in outputs]
+    if missing:
+        raise ValueError(f"{missing[0]}: not an output of the model (outputs: {sorted(outputs)})")
+    for name in problem.outputs:
+        shape = jnp.shape(outputs[name])
+        if shape != ():
+            raise ValueError(f"{name}: the model must return a dict of scalar outputs; {name!r} has shape {shape}")
+
+
 def per_problem(fn):
     """Memoise ``fn(problem)`` (host-side facts about a problem: arrays, names, layouts)
     for as long as that problem object lives: a solve of a small problem costs less than

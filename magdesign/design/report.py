@@ -66,9 +66,19 @@ def _layout(problem):
     return _Layout(names, problem.outputs, len(problem.targets), tuple(_keys(problem)), limit_rows, units)
 
 
-def format_quantity(value: float, unit: str | None) -> str:
-    """An SI value shown in ``unit`` ("5.8458 mm"), or bare when ``unit`` is None."""
-    return f"{convert(value, unit):.6g} {unit}" if unit else f"{value:.6g}"
+def format_quantity(value: float, unit: str | None, digits: int = 6) -> str:
+    """An SI value shown in ``unit`` ("5.8458 mm") to ``digits`` significant digits, or bare
+    when ``unit`` is None."""
+    return f"{convert(value, unit):.{digits}g} {unit}" if unit else f"{value:.{digits}g}"
+
+
+def _missed(value: float, reference: float, unit: str | None) -> str:
+    """``value`` shown with the fewest digits (6 to 15) that tell it from ``reference``: a
+    row that misses its target or bound by less than 6 digits show is seen to miss it."""
+    for digits in range(6, 16):
+        if format_quantity(value, unit, digits) != format_quantity(reference, unit, digits):
+            break
+    return format_quantity(value, unit, digits)
 
 
 class DesignResult(eqx.Module):
@@ -213,21 +223,28 @@ class DesignResult(eqx.Module):
         if self.targets:
             lines.append(row("target", "wanted", "achieved", "met"))
             for name, t in self.targets.items():
-                met = "no" if name in self.violated else "yes"
-                lines.append(
-                    row(name, format_quantity(t["target"], unit(name)), format_quantity(t["achieved"], unit(name)), met)
+                missed = name in self.violated
+                achieved = (
+                    _missed(t["achieved"], t["target"], unit(name))
+                    if missed
+                    else format_quantity(t["achieved"], unit(name))
                 )
+                lines.append(row(name, format_quantity(t["target"], unit(name)), achieved, "no" if missed else "yes"))
         if self.limits:
-            lines.append(row("limit", "bound", "achieved", "active"))
+            lines.append(row("limit", "bound", "achieved", "active"))  # a broken limit: VIOLATED
             for name, lim in self.limits.items():
                 bounds = " ".join(
                     f"{'<=' if side == 'upper' else '>='} {format_quantity(lim[side], unit(name))}"
                     for side in ("upper", "lower")
                     if side in lim
                 )
-                lines.append(
-                    row(name, bounds, format_quantity(lim["achieved"], unit(name)), "yes" if lim["active"] else "no")
+                broken = next((side for side in ("upper", "lower") if f"{name}.{side}" in self.violated), None)
+                achieved = (
+                    _missed(lim["achieved"], lim[broken], unit(name))
+                    if broken
+                    else format_quantity(lim["achieved"], unit(name))
                 )
+                lines.append(row(name, bounds, achieved, "VIOLATED" if broken else "yes" if lim["active"] else "no"))
         if objective is not None:
             lines.append(row("objective", "value"))
             lines.append(row(aim, format_quantity(self.outputs[objective], unit(objective))))

@@ -106,16 +106,18 @@ from magdesign._numerics import (
     DESIGN_ON_CONSTRAINT,
     DESIGN_POINT_SECONDS,
     DESIGN_POLISH_REACH,
+    DESIGN_PROGRESS_STEPS,
     DESIGN_RTOL,
     DESIGN_SOLVABLE_RTOL,
     DESIGN_START_NUDGE,
     TINY,
     safe_div,
 )
+from magdesign._progress import stage
 from magdesign._tracing import compiler_options, gc_paused, has_loops, traced_once
 from magdesign.design._linear import LUOrSVD
 from magdesign.design._qp import solve_qp, where_needed
-from magdesign.design.problem import Problem, per_problem
+from magdesign.design.problem import Problem, check_outputs, per_problem
 from magdesign.design.report import STATUS_NAMES, DesignResult, DesignStatus, DesignSweep
 
 # Armijo's sufficient-decrease fraction of the line search, and the shortest step it tries;
@@ -211,9 +213,7 @@ def _evaluate(problem: Problem, y, theta):
                 f"{name}: the model reads an input that is neither a variable nor fixed (inputs: {sorted(inputs)})"
             ) from error
         raise
-    missing = [name for name in problem.outputs if name not in outputs]
-    if missing:
-        raise ValueError(f"{missing[0]}: not an output of the model (outputs: {sorted(outputs)})")
+    check_outputs(problem, outputs)
     return outputs, *_scaled_rows(problem, outputs, theta)
 
 
@@ -1752,17 +1752,20 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None, con
         else None
     )
     packed = None
-    if len(y0) and jax.default_backend() == "cpu" and _iterative(problem):
-        with _errors_as_nan(), gc_paused():
-            program = _compiled(key, False).lower(arrays, y0[0], thetas[0]).compile()
-        first_began = time.perf_counter()
-        first = np.asarray(program(arrays, y0[0], thetas[0]))
-        if time.perf_counter() - first_began > DESIGN_POINT_SECONDS:
-            packed = _one_by_one(_host(problem), program, arrays, first, y0, thetas, bar, continuation)
-    if packed is None:
-        packed = _in_chunks(key, arrays, y0, thetas, share, chunk, bar)
-    if bar is not None:
-        bar.close()
+    try:
+        if len(y0) and jax.default_backend() == "cpu" and _iterative(problem):
+            stage("compiling the solver for one point at a time (first call; later runs load it from the cache)")
+            with _errors_as_nan(), gc_paused():
+                program = _compiled(key, False).lower(arrays, y0[0], thetas[0]).compile()
+            first_began = time.perf_counter()
+            first = np.asarray(program(arrays, y0[0], thetas[0]))
+            if time.perf_counter() - first_began > DESIGN_POINT_SECONDS:
+                packed = _one_by_one(_host(problem), program, arrays, first, y0, thetas, bar, continuation)
+        if packed is None:
+            packed = _in_chunks(key, arrays, y0, thetas, share, chunk, bar)
+    finally:
+        if bar is not None:
+            bar.close()
     if processes > 1:
         with _stdout_to_stderr():  # gloo announces its connections on stdout (fd 1)
             packed = multihost_utils.process_allgather(_padded(packed, share), tiled=True)[:count]
@@ -1798,12 +1801,13 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
     interpreter while it runs, so the threads run their points side by side.
 
     With ``continuation`` the points go in runs of DESIGN_CHAIN, one run per thread at a
-    time (the progress bar moves a run at a time): the first of a run starts from its
+    time (the progress bar moves a point at a time): the first of a run starts from its
     y0, each next from the optimum that the point before predicts to first order with
     its implicit derivatives (where that point is successful and has them), and where a
     point so started is not successful it is solved again from its y0. The runs depend
     on the points' order (and, under ``jax.distributed``, on each process's share), not
-    on the threads. Without, every point starts from its y0."""
+    on the threads. Without, every point starts from its y0. Interrupted (Ctrl-C), the threads
+    stop after the point each is solving."""
     memory = program.memory_analysis()
     per_point = None if memory is None else memory.temp_size_in_bytes
     workers = usable_cores() if not per_point else min(usable_cores(), max(1, DESIGN_BATCH_MEMORY // per_point))
@@ -1829,20 +1833,32 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
 
     def run(head):
         packed = [first if head == 0 else solved(head, y0[head])]
+        moved(1)
         for i in range(head + 1, min(head + length, len(y0))):
+            if stopping:  # the main thread was interrupted (Ctrl-C): its answer is not wanted
+                break
             start = predicted(packed[-1], i)
             result = None if start is None else solved(i, start)
             packed.append(result if successful(result) else solved(i, y0[i]))
+            moved(1)
         return packed
+
+    def moved(points):
+        if bar is not None:
+            bar.update(points)
 
     length = DESIGN_CHAIN if continuation else 1
     heads = range(0, len(y0), length)
-    packed = []
-    with ThreadPoolExecutor(max(1, min(workers, len(heads)))) as pool:
+    packed, stopping = [], []
+    pool = ThreadPoolExecutor(max(1, min(workers, len(heads))))
+    try:
         for results in pool.map(run, heads):
             packed += results
-            if bar is not None:
-                bar.update(len(results))
+    except BaseException:
+        stopping.append(True)  # the threads stop after their current point
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
     return np.stack(packed)
 
 
@@ -1853,8 +1869,11 @@ def _in_chunks(key, arrays, y0, thetas, share, chunk, bar):
     # equal chunks, each a multiple of the device count: one compiled shape, little padding
     # (a batch that fits one chunk is padded to a power of two, so that sweeps of nearby
     # sizes share one compiled program)
+    # (and at least about DESIGN_PROGRESS_STEPS chunks where the points allow, so that the
+    # progress bar moves during a sweep of a few points)
     limit = chunk or DESIGN_CHUNK
-    size = min(1 << max(share - 1, 0).bit_length(), limit) if share <= limit else -(-share // -(-share // limit))
+    wanted = -(-share // DESIGN_PROGRESS_STEPS)
+    size = min(1 << max(wanted - 1, 0).bit_length(), limit) if wanted <= limit else -(-share // -(-share // limit))
     size = -(-size // len(devices)) * len(devices)
     sharding = (
         NamedSharding(Mesh(np.array(devices), ("points",)), PartitionSpec("points")) if len(devices) > 1 else None
@@ -1882,6 +1901,10 @@ def _batch_program(key, arrays, size, n, p, sharding):
     while True:
         entry = (key, size, n, p, devices)
         if entry not in _PROGRAMS:
+            stage(
+                f"compiling the solver for batches of {size} point{'s' if size > 1 else ''} "
+                "(first call; later runs load it from the cache)"
+            )
             if len(_PROGRAMS) >= 64:
                 _PROGRAMS.clear()
             shape = lambda columns: jax.ShapeDtypeStruct((size, columns), jnp.float64, sharding=sharding)  # noqa: E731

@@ -29,17 +29,20 @@ import copy
 import datetime
 import importlib.metadata
 import importlib.resources
+import itertools
 import math
 import os
 import re
 import secrets
 import tomllib
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array
 
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable, remember_source
@@ -56,10 +59,10 @@ from magdesign.scene import (
     with_parameters,
 )
 from magdesign.scene._spec import check_domain, check_keys, parameter_unit, sub_table
-from magdesign.scene.build import check_wall
+from magdesign.scene.build import check_magnet_fits, check_wall
 from magdesign.scene.mechanics import Dome
-from magdesign.spec.keys import check_output_number, fields
-from magdesign.units import SpecError, echo, parse, unit_factor, written_unit
+from magdesign.spec.keys import KEYS, check_output_number, fields, spec_name
+from magdesign.units import SpecError, convert, echo, parse, unit_factor, written_unit
 
 # The keys of an entry of each design table, from the key table (a target's tolerance is read
 # by magdesign.design.tolerance).
@@ -259,6 +262,64 @@ def solved_spec(spec: dict, values: Mapping[str, float], units: Mapping[str, str
     return solved
 
 
+# The most values of one swept scene parameter (or rows of a list of points) whose scenes
+# are built and checked one by one, evenly spaced with both ends; beyond, the values between
+# are checked by their domain only (magdesign.cli reads each value as a spec value).
+SWEEP_CHECKS = 1000
+
+
+def _spread(items):
+    """At most :data:`SWEEP_CHECKS` of ``items``, evenly spaced, the first and last kept."""
+    if len(items) <= SWEEP_CHECKS:
+        return items
+    return [items[i] for i in np.unique(np.linspace(0, len(items) - 1, SWEEP_CHECKS).round().astype(int))]
+
+
+def check_swept(spec: dict, over: Mapping, grid: bool = True) -> None:
+    """SpecError unless each swept value of a scene parameter passes the checks the same
+    value passes in ``spec``: the scene is built with it in place (:func:`scene_from_spec`:
+    its domain and the scene's guards, a wall thinner than the dome, the magnet carried by
+    its part, sensors outside the magnet, ...).
+
+    ``over`` {key: (k,) SI values} of a sweep (targets' and limits' keys are not scene
+    parameters and pass); ``grid``: each key's values with the others at the spec's, and
+    every corner of the grid (the guards are linear in each parameter), else the lists
+    taken together row by row. At most :data:`SWEEP_CHECKS` values or rows are built.
+    """
+    keys = [key for key in over if spec_name(key) in KEYS and not key.startswith("design.")]
+    if not keys:
+        return
+    columns = {key: np.atleast_1d(np.asarray(over[key], np.float64)).tolist() for key in keys}
+    if grid:
+        rows = [{key: value} for key in keys for value in _spread(sorted(set(columns[key])))]
+        rows += [dict(zip(keys, corner)) for corner in itertools.product(*((min(c), max(c)) for c in columns.values()))]
+    else:
+        rows = _spread([dict(zip(keys, row)) for row in dict.fromkeys(zip(*columns.values()))])
+    for row in rows:
+        with warnings.catch_warnings():  # a plain number's warning was given where it was read
+            warnings.simplefilter("ignore")
+            try:
+                scene_from_spec(solved_spec(spec, row))
+            except SpecError as error:
+                shown = {key: _parameter_unit(spec, key)[1] for key in row}
+                swept = ", ".join(f"{key} = {convert(value, shown[key]):g} {shown[key]}" for key, value in row.items())
+                raise SpecError(f"swept {swept}: {error}") from None
+
+
+def target_tolerance(value, target: float, unit: str, where: str) -> float:
+    """The allowed miss (SI, >= 0) of a target's ``tolerance`` as written: "%" of the
+    target's value ``target`` (SI), or a quantity in the output's SI ``unit``; SpecError
+    naming ``where`` for a negative size. The one reading of it, for ``solve`` and
+    ``tolerance`` alike."""
+    if written_unit(value) == "%":
+        width = parse(value, "1", key=where) * abs(float(target))
+    else:
+        width = parse(value, unit, key=where)
+    if not width >= 0.0:
+        raise SpecError(f"{where}: a tolerance is a size (>= 0), got {echo(value)}")
+    return width
+
+
 @contextlib.contextmanager
 def _named(where):
     """Turn a ValueError of the problem's own checks into a SpecError naming ``where``."""
@@ -300,7 +361,8 @@ def _si_unit(output_units, name):
 
 def _dome_wall_guards(scene, variables):
     """[the geometry limit ``wall_fraction <= 1``] where the variables' box holds domes
-    whose wall is not thinner than their radius, else []; SpecError if it holds no dome."""
+    whose wall is not thinner than their radius, else []; SpecError if it holds no dome, or
+    a magnet wider than a dome (a guard refused at load: the box must keep the magnet narrower)."""
     mechanics = getattr(scene, "mechanics", None)
     if not isinstance(mechanics, Dome):
         return []
@@ -309,6 +371,12 @@ def _dome_wall_guards(scene, variables):
     def extreme(name, side, fixed):
         return float(getattr(bounds[name], side)) if name in bounds else float(fixed)
 
+    # the widest magnet of the box fits the narrowest dome (a magnet wider than its dome is refused)
+    check_magnet_fits(
+        extreme("magnet.radius", "upper", scene.radius),
+        extreme("mechanics.outer_radius", "lower", mechanics.outer_radius),
+        key="design.variables.magnet.radius.upper" if "magnet.radius" in bounds else "magnet.radius",
+    )
     key = "design.variables.mechanics.thickness.lower" if "mechanics.thickness" in bounds else "mechanics.thickness"
     check_wall(
         extreme("mechanics.thickness", "lower", mechanics.thickness),
@@ -500,6 +568,8 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
                 f"{where}: a target of 0 needs a scale to judge 'met' by; write it as "
                 f'{{ value = {entry["value"]!r}, scale = "..." }} with a quantity in {unit}'
             )
+        if "tolerance" in entry:  # read here as the tolerance analysis reads it: one rule for both
+            target_tolerance(entry["tolerance"], numbers["value"], unit, f"{where}.tolerance")
         with _named(where):
             targets.append(
                 Target(name, numbers["value"], scale=numbers.get("scale"), unit=written_unit(entry["value"]))

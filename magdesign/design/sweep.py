@@ -9,16 +9,24 @@ implicit derivatives of its optimum with respect to each of those inputs.
 """
 
 import itertools
+import math
 from collections.abc import Mapping
 
 import numpy as np
 from jaxtyping import ArrayLike
 
 from magdesign._numerics import DESIGN_ATOL, DESIGN_RTOL
-from magdesign.design.problem import Problem
+from magdesign.design.problem import Problem, source_of
 from magdesign.design.report import DesignSweep
 from magdesign.design.solve import _host, _start, settings_of, solve_batch
 from magdesign.scene import parameters
+from magdesign.spec.sizes import check_fits
+
+# Copies of a sweep's records (inputs, outputs, parameters and their derivatives per point)
+# held at once: the batches' results, their joined arrays and the DesignSweep's own.
+SWEEP_COPIES = 4
+# Above this many points a sweep warns that it is long (every point is a solve).
+SLOW_SWEEP = 100_000
 
 
 def sweepable(problem: Problem) -> dict[str, float]:
@@ -119,6 +127,12 @@ def sweep(
     Returns:
         A :class:`DesignSweep` with arrays of the grid's shape; a point that fails has its
         status, never an exception.
+
+    Raises:
+        ValueError: a key that cannot be swept, values that are not finite; a
+            :class:`~magdesign.units.SpecError` for a problem built from a spec where a
+            swept scene parameter fails a check its spec value would fail
+            (:func:`magdesign.design.spec.check_swept`).
     """
     if isinstance(over, str):
         over = {over: values}
@@ -129,7 +143,21 @@ def sweep(
             raise ValueError(f"{key}: a variable of the problem (free); sweep a target, a limit bound or a fixed input")
         if key not in known:
             raise ValueError(f"{key}: not a sweepable input of the problem; expected one of {', '.join(known)}")
+    count = math.prod(np.size(v) for v in over.values()) if grid else max(map(np.size, over.values()), default=0)
+    record = len(sweepable(problem)) + len(problem.outputs) + len(problem.variables) * (len(sweepable(problem)) + 3)
+    check_fits(
+        f"{count} sweep points",
+        count * record,
+        factor=SWEEP_COPIES,
+        what="the points' records",
+        slow=(SLOW_SWEEP * record, f"each of the {count} points is a full solve"),
+    )
     points, shape = points_of(over, grid)
+    source = source_of(problem)
+    if source is not None:  # every swept scene parameter passes the checks of a spec value
+        from magdesign.design.spec import check_swept  # the spec reader imports this module
+
+        check_swept(source, over, grid)
     rows = [t.output for t in problem.targets] + [
         f"{problem.limits[i].output}.{side}" for i, side in problem.limit_rows
     ]

@@ -53,12 +53,12 @@ from magdesign._numerics import ROUNDING_SPREAD, TINY
 from magdesign.design.problem import Limit, Problem
 from magdesign.design.report import DesignResult, format_quantity
 from magdesign.design.solve import solve
-from magdesign.design.spec import problem_from_spec
+from magdesign.design.spec import problem_from_spec, target_tolerance
 from magdesign.scene import AbstractScene, Loads, loads_from_spec, outputs, parameters, with_parameters
 from magdesign.scene import effects as fx
 from magdesign.scene._spec import check_keys, parameter_unit, sub_table
 from magdesign.scene.build import NDFEB_DRIFT
-from magdesign.spec.keys import KEYS, fields
+from magdesign.spec.keys import KEYS, domain_text, fields, listed
 from magdesign.units import SpecError, convert, echo, parse, written_unit
 
 DISTRIBUTIONS = tuple(KEYS["design.tolerances.distribution"].choices)
@@ -171,6 +171,34 @@ def _size(value, unit, where, per_axis):
     return (np.asarray(sizes) if per_axis else np.asarray(sizes[0])), relative
 
 
+# A normal tolerance's draws stay in the parameter's physical domain out to this many standard
+# deviations (beyond, 0.27 % of draws for a two-sided bound: a spread this wide is refused).
+DOMAIN_SIGMAS = 3.0
+
+
+def _check_spread(name, nominal, width, distribution, where):
+    """SpecError naming ``where`` where the draws of scene parameter ``name`` (``nominal`` SI,
+    a standard deviation or half-width ``width`` SI) leave its physical domain (the key
+    table's): a uniform spread whose interval crosses a bound, a normal one whose
+    :data:`DOMAIN_SIGMAS` sigmas cross it. Refused rather than truncated: a draw outside is
+    not a part that exists (a negative remanence or stiffness)."""
+    domain = listed(name).domain
+    if domain is None or width == 0.0:
+        return
+    reach = width * (1.0 if distribution == "uniform" else DOMAIN_SIGMAS)
+    low, low_ok, high, high_ok = domain
+    lowest, highest = nominal - reach, nominal + reach
+    below = low is not None and (lowest < low or (lowest == low and not low_ok))
+    above = high is not None and (highest > high or (highest == high and not high_ok))
+    if below or above:
+        spread = "its interval" if distribution == "uniform" else f"{DOMAIN_SIGMAS:g} standard deviations"
+        raise SpecError(
+            f"{where}: the draws of {name} reach {lowest:g} to {highest:g} {parameter_unit(name)} ({spread} about "
+            f"{nominal:g}), "
+            f"outside its physical domain {domain_text(domain)}; expected a smaller tolerance"
+        )
+
+
 def _with_effect(scene, name, spec):
     """The scene with the effect input ``name`` moves, added at zero where it is not listed."""
     cls, field, _, _ = EFFECT_INPUTS[name]
@@ -234,6 +262,9 @@ def tolerance_problem_from_spec(spec: dict, *, fidelity: str | None = None) -> T
             )
         size, relative = _size(entry, unit, where, per_axis)
         shown = entry if isinstance(entry, str) else echo(entry)
+        if name in known:
+            nominal = float(known[name])
+            _check_spread(name, nominal, float(size) * abs(nominal) if relative else float(size), distribution, where)
         inputs.append(Tolerance(name, jnp.asarray(size), relative, distribution, shown))
 
     target_tolerances = []
@@ -242,12 +273,7 @@ def tolerance_problem_from_spec(spec: dict, *, fidelity: str | None = None) -> T
         if not (isinstance(entry, dict) and "tolerance" in entry):
             continue
         where, value = f"design.targets.{target.output}.tolerance", entry["tolerance"]
-        if written_unit(value) == "%":
-            width = parse(value, "1", key=where) * abs(float(target.value))
-        else:
-            width = parse(value, scene.output_units.get(target.output, "1"), key=where)
-        if width < 0:
-            raise SpecError(f"{where}: a tolerance is a size (>= 0), got {echo(value)}")
+        width = target_tolerance(value, target.value, scene.output_units.get(target.output, "1"), where)
         target_tolerances.append((target.output, width))
     return ToleranceProblem(problem, scene, loads_from_spec(spec), tuple(inputs), tuple(target_tolerances), sensors)
 

@@ -89,7 +89,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign._numerics import EDGE_DISTANCE_MIN, float_array, safe_atan2, safe_sqrt
-from magdesign._validation import check_last_axis, check_positive
+from magdesign._validation import check_broadcasts, check_last_axis, check_positive
 
 # Far field: beyond FAR_SWITCH half diagonals from the centre the block is FAR_NODES^3
 # point dipoles (Gauss-Legendre in each axis), exact for every multipole moment up to
@@ -325,6 +325,7 @@ def cuboid_tensor(
     check_last_axis("points", points, 3)
     check_last_axis("dimension", dimension, 3)
     check_positive(dimension=dimension, unit="m")
+    check_broadcasts("points", points, dimension=dimension)
     points = float_array(points)
     half = jnp.asarray(0.5 * jnp.asarray(dimension), dtype=points.dtype)
     shape = jnp.broadcast_shapes(points.shape, half.shape)
@@ -375,6 +376,7 @@ def cuboid(
     diverges logarithmically) the value is about that at 1e-15 half diagonals from it.
     """
     check_last_axis("polarization", polarization, 3)
+    check_broadcasts("points", points, dimension=dimension, polarization=polarization)
     tensor = cuboid_tensor(points, dimension=dimension)
     polarization = jnp.asarray(polarization, dtype=tensor.dtype)
     return jnp.einsum("...ij,...j->...i", tensor, polarization)

@@ -47,6 +47,7 @@ same closed forms (a custom JVP), not from differentiating the elliptic-integral
 
 import functools
 import math
+import warnings
 
 import jax
 import jax.numpy as jnp
@@ -54,7 +55,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign._numerics import double_where, float_array, safe_sqrt
-from magdesign._validation import check_last_axis, check_positive
+from magdesign._validation import check_broadcasts, check_last_axis, check_positive, check_scalar
 from magdesign.fields._special import (
     AXIS_SERIES_S,
     FACE_SWITCH,
@@ -116,7 +117,7 @@ def _on_axis_polynomials(order):
 
 
 # Near the axis (s < AXIS_SERIES_S) the functions are taken from their series in s, whose
-# coefficients are derivatives of the on-axis field f(z) (the closed form of cylinder_on_axis):
+# coefficients are derivatives of the on-axis field f(z) (the closed form of cylinder_axial):
 # u = sum_m a_m s^m f^(2m)(z), a_m = 2 (m+1) (-1)^(m+1) / (4^(m+1) ((m+1)!)^2).
 AXIS_SERIES_TERMS = 4
 _AXIS_A = tuple(
@@ -727,8 +728,8 @@ def cylinder(
     Args:
         points: observation points (m) in the magnet frame, shape (..., 3): centre at
             the origin, axis along z. Inside and outside.
-        radius: cylinder radius R (m), > 0.
-        height: cylinder height D (m), > 0.
+        radius: cylinder radius R (m), > 0, a scalar (one magnet per call).
+        height: cylinder height D (m), > 0, a scalar.
         polarization: magnetic polarization J = mu0 M (T) (the remanence Br for a
             permanent magnet): a scalar for a magnet polarized along +z (any sign), or a
             vector (..., 3) (Jx, Jy, Jz) in the magnet frame for any direction (axial plus
@@ -739,7 +740,7 @@ def cylinder(
             wall's loops for thin magnets; see the module docstring) or "dipole" (the
             point dipole of the same moment J pi R^2 D / mu0; relative error
             O((R^2 + D^2/4) / r^2) far away, wrong near), or "axis" (the on-axis
-            closed form :func:`cylinder_on_axis` taken at the point's height, with the
+            closed form :func:`cylinder_axial` taken at the point's height, with the
             diametral part -J_perp f / 2 + chi J_perp of the on-axis field: exact on the
             axis; off the axis an approximation whose error grows like (rho / R)^2, for
             scenes whose sensors sit on the axis and move along it).
@@ -761,18 +762,20 @@ def cylinder(
     if fidelity not in FIDELITIES:
         raise ValueError(f"fidelity must be one of {FIDELITIES}, got {fidelity!r}")
     check_last_axis("points", points, 3)
+    check_scalar("one magnet per call; jax.vmap maps over several", radius=radius, height=height)
     check_positive(radius=radius, height=height, unit="m")
     axial = jnp.ndim(polarization) == 0
     if not axial:
         check_last_axis("polarization", polarization, 3)
+        check_broadcasts("points", points, polarization=polarization)
     points = float_array(points)
     polarization = jnp.asarray(polarization, dtype=points.dtype)
     vector = jnp.stack([0.0 * polarization, 0.0 * polarization, polarization], -1) if axial else polarization
     if fidelity == "dipole":
         return dipole(points, vector * (jnp.pi * radius**2 * height / MU0))
     if fidelity == "axis":
-        # B_z on the axis is even in z: the height above the nearer face is |z| - D/2.
-        on_axis = cylinder_on_axis(jnp.abs(points[..., 2]) - 0.5 * height, radius=radius, height=height, remanence=1.0)
+        # B_z on the axis is even in z: taken at |z|, on the side of the top face.
+        on_axis = cylinder_axial(jnp.abs(points[..., 2]), radius=radius, height=height, polarization=1.0)
         inside = 0.5 * (1.0 + jnp.sign(0.5 * height - jnp.abs(points[..., 2])))
         transverse = inside - 0.5 * on_axis
         return vector * jnp.stack([transverse, transverse, on_axis], axis=-1)
@@ -781,14 +784,50 @@ def cylinder(
     return _unit_field(points / radius, b, polarization, axial, branch if isinstance(branch, int) else None)
 
 
+def cylinder_axial(
+    z: Float[ArrayLike, "..."],
+    *,
+    radius: Float[ArrayLike, "..."],
+    height: Float[ArrayLike, "..."],
+    polarization: Float[ArrayLike, "..."],
+) -> Float[Array, "..."]:
+    """B_z (T) on the axis of an axially magnetised cylinder, in closed form (the
+    dome-Hall paper's Eq. 1 with z measured from the magnet's centre):
+
+        B_z = J/2 [(z + D/2) / sqrt(R^2 + (z + D/2)^2) - (z - D/2) / sqrt(R^2 + (z - D/2)^2)]
+
+    Args:
+        z: the point's coordinate (m) along the axis in the magnet frame (centre at the
+            origin, magnetised along +z), any shape: the top face is at z = D/2, so a
+            sensor a gap g above the top face is at z = g + D/2. Inside and outside.
+        radius: R (m), > 0.
+        height: D (m), > 0.
+        polarization: J = mu0 M (T): the remanence Br for a permanent magnet.
+        ``radius``, ``height`` and ``polarization`` broadcast with ``z``.
+
+    Returns:
+        B_z (T), shape of the arguments broadcast together (see docs/models.md,
+        "Conventions"). Evaluated without cancellation at any distance (see
+        :func:`_on_axis`).
+    """
+    check_positive(radius=radius, height=height, unit="m")
+    check_broadcasts("z", z, radius=radius, height=height, polarization=polarization)
+    z = float_array(z)
+    return 0.5 * polarization * _on_axis(z + 0.5 * height, z - 0.5 * height, radius, height)
+
+
 def cylinder_on_axis(
     z: Float[ArrayLike, "..."],
     *,
     radius: Float[ArrayLike, ""],
     height: Float[ArrayLike, ""],
-    remanence: Float[ArrayLike, ""],
+    polarization: Float[ArrayLike, ""] | None = None,
+    remanence: Float[ArrayLike, ""] | None = None,
 ) -> Float[Array, "..."]:
-    """B_z (T) on the axis of an axially magnetised cylinder (the dome-Hall paper's Eq. 1).
+    """Deprecated: :func:`cylinder_axial` at ``z + height / 2``, which measures z from the
+    magnet's centre like every other field function. Kept for one release; it warns.
+
+    B_z (T) on the axis of an axially magnetised cylinder (the dome-Hall paper's Eq. 1),
 
         B_z = Br/2 [(D + z) / sqrt(R^2 + (D + z)^2) - z / sqrt(R^2 + z^2)]
 
@@ -797,25 +836,40 @@ def cylinder_on_axis(
             magnet (-D < z < 0) and below it.
         radius: R (m), > 0.
         height: D (m), > 0.
-        remanence: Br (T).
+        polarization: Br (T); ``remanence`` is its old name (give one of them).
 
     Returns:
-        B_z (T), shape of ``z``. With u = D + z, v = z and s_u, s_v the two roots, the
-        bracket is evaluated as R^2 D (u + v) / (s_u s_v (u s_v + v s_u)) where u, v have
-        the same sign (no cancellation at any distance), and as (u s_v - v s_u) / (s_u s_v)
-        where they differ (a sum of two positive terms).
+        B_z (T), the same numbers as before the deprecation.
     """
+    if (polarization is None) == (remanence is None):
+        raise TypeError("cylinder_on_axis(): give polarization= (or its deprecated name remanence=), once")
+    polarization = remanence if polarization is None else polarization
+    warnings.warn(
+        "fields.cylinder_on_axis(z, ..., remanence=) measures z from the top face and is deprecated; use "
+        "fields.cylinder_axial(z + height / 2, radius=..., height=..., polarization=...), which measures "
+        "z from the magnet's centre",
+        DeprecationWarning,
+        stacklevel=2,
+    )
     check_positive(radius=radius, height=height, unit="m")
+    check_broadcasts("z", z, radius=radius, height=height, polarization=polarization)
     z = float_array(z)
-    u = height + z
+    return 0.5 * polarization * _on_axis(height + z, z, radius, height)
+
+
+def _on_axis(u, v, radius, height):
+    """The bracket of the on-axis field, u / s_u - v / s_v, of the heights u and v = u - D
+    (m) of the point above the bottom and the top face, with s_u, s_v their roots
+    sqrt(R^2 + u^2). It is evaluated as R^2 D (u + v) / (s_u s_v (u s_v + v s_u)) where u,
+    v have the same sign (no cancellation at any distance), and as (u s_v - v s_u) /
+    (s_u s_v) where they differ (a sum of two positive terms)."""
     s_u = jnp.sqrt(radius**2 + u * u)
-    s_v = jnp.sqrt(radius**2 + z * z)
+    s_v = jnp.sqrt(radius**2 + v * v)
     # The bracket is (u s_v - v s_u) / (s_u s_v); where u and v have the same sign its
     # numerator is R^2 D (u + v) / (u s_v + v s_u), whose denominator can vanish only where
-    # they differ (at the centre, z = -D/2), so each form is taken where it is exact.
-    a, b = u * s_v, z * s_u
-    opposite = u * z < 0.0
-    bracket = double_where(
-        opposite, (a - b) / (s_u * s_v), lambda ab: radius**2 * height * (u + z) / (s_u * s_v * ab), a + b
+    # they differ (at the centre, u = -v), so each form is taken where it is exact.
+    a, b = u * s_v, v * s_u
+    opposite = u * v < 0.0
+    return double_where(
+        opposite, (a - b) / (s_u * s_v), lambda ab: radius**2 * height * (u + v) / (s_u * s_v * ab), a + b
     )
-    return 0.5 * remanence * bracket

@@ -4,7 +4,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign._numerics import float_array, safe_div, safe_sqrt
-from magdesign._validation import check_last_axis
+from magdesign._validation import check_broadcasts, check_last_axis
 from magdesign.units import MU0
 
 
@@ -23,6 +23,7 @@ def dipole(points: Float[ArrayLike, "... 3"], moment: Float[ArrayLike, "... 3"])
     """
     check_last_axis("points", points, 3)
     check_last_axis("moment", moment, 3)
+    check_broadcasts("points", points, moment=moment)
     points = float_array(points)
     moment = float_array(moment)
     inv_r2 = safe_div(1.0, jnp.sum(points * points, axis=-1, keepdims=True))

@@ -29,7 +29,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign._numerics import EDGE_DISTANCE_MIN, expm1_ratio, safe_atan2
-from magdesign._validation import check_positive
+from magdesign._validation import check_broadcasts, check_positive, renamed_keyword
 
 # Gauss-Legendre nodes per half period of a finite film (see _strip_field): the smooth
 # part of its integrand is e^{ikx} times an entire function of x, integrated over
@@ -41,7 +41,12 @@ _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(FILM_NODES)
 
 
 def film_magnitude(
-    z: Float[ArrayLike, "..."], *, period: float, thickness: float, magnetization: float
+    z: Float[ArrayLike, "..."],
+    *,
+    period: float,
+    thickness: float,
+    polarization: float | None = None,
+    magnetization: float | None = None,
 ) -> Float[Array, "..."]:
     """|B| (T) at depth ``z`` (m) below the bottom face of an infinite film.
 
@@ -49,14 +54,20 @@ def film_magnitude(
         z: depth below the bottom face (m), any shape; z >= 0 is the physical range.
         period: magnetisation period T (m), > 0.
         thickness: film thickness d (m), > 0.
-        magnetization: the amplitude J0 = mu0 M0 of the film's polarization (T).
+        polarization: the amplitude J0 = mu0 M0 of the film's polarization (T);
+            ``magnetization`` is its deprecated name (the same quantity, in T).
 
     Returns |B| = J0 (1 - e^{-kd}) e^{-kz}, with 1 - e^{-kd} = -expm1(-kd) (full
     relative precision for a thin film, kd << 1); never overflows.
     """
+    polarization = renamed_keyword("film_magnitude", "magnetization", magnetization, "polarization", polarization)
+    return _magnitude(z, period, thickness, polarization)
+
+
+def _magnitude(z, period, thickness, polarization):
     check_positive(period=period, thickness=thickness, unit="m")
     k = 2.0 * jnp.pi / period
-    return magnetization * -jnp.expm1(-k * thickness) * jnp.exp(-k * jnp.asarray(z))
+    return polarization * -jnp.expm1(-k * thickness) * jnp.exp(-k * jnp.asarray(z))
 
 
 def _strip_term(w, k, half_width, panels):
@@ -86,7 +97,7 @@ def _strip_term(w, k, half_width, panels):
     return (pole - 1j * k * smooth) / (2.0 * jnp.pi)
 
 
-def _strip_field(x, z, k, thickness, magnetization, periods):
+def _strip_field(x, z, k, thickness, polarization, periods):
     """(Bx, Bz) of a strip of ``periods`` periods, |x| <= periods pi / k, in the film frame.
 
     From the line dipoles of the film, in complex form (w = x + i z):
@@ -96,7 +107,7 @@ def _strip_field(x, z, k, thickness, magnetization, periods):
     w = x + 1j * z
     half_width = periods * jnp.pi / k
     panels = 2 * periods
-    complex_field = magnetization * (
+    complex_field = polarization * (
         _strip_term(w, k, half_width, panels) - _strip_term(w + 1j * thickness, k, half_width, panels)
     )
     return jnp.real(complex_field), -jnp.imag(complex_field)
@@ -108,15 +119,19 @@ def film(
     *,
     period: float,
     thickness: float,
-    magnetization: float,
+    polarization: float | None = None,
     periods: int | None = None,
+    magnetization: float | None = None,
 ) -> tuple[Float[Array, "..."], Float[Array, "..."]]:
     """(Bx, Bz) (T) of the film at lateral position ``x`` (m) and depth ``z`` (m).
 
     Args:
         x: position along the pattern (m); ``x`` and ``z`` broadcast together.
-        z: depth below the film's bottom face (m), >= 0.
-        period, thickness, magnetization: T (m), d (m), J0 (T); see :func:`film_magnitude`.
+        z: depth below the film's bottom face (m), >= 0: the film, an infinite sheet with
+            no centre, is the one source whose positions are measured from a face (see
+            docs/models.md, "Conventions").
+        period, thickness, polarization: T (m), d (m), J0 (T); see :func:`film_magnitude`
+            (``magnetization`` is the deprecated name of ``polarization``).
         periods: None for an infinite film (closed form: Bx = |B| sin kx, Bz = |B| cos kx);
             an integer N >= 1 (static) for a strip N periods wide centred on x = 0, computed
             exactly up to Gauss-Legendre quadrature of an entire integrand (FILM_NODES per
@@ -126,14 +141,16 @@ def film(
     Returns:
         (Bx, Bz) in the film frame (module docstring): Bz along the depth axis.
     """
+    polarization = renamed_keyword("film", "magnetization", magnetization, "polarization", polarization)
     check_positive(period=period, thickness=thickness, unit="m")
+    check_broadcasts("x", x, z=z)
     k = 2.0 * jnp.pi / period
     x, z = jnp.asarray(x, dtype=float), jnp.asarray(z, dtype=float)
     if periods is not None:
         if not (isinstance(periods, int) and periods >= 1):
             raise ValueError(f"periods must be None or an integer >= 1, got {periods!r}")
-        return _strip_field(x, z, k, thickness, magnetization, periods)
-    magnitude = film_magnitude(z, period=period, thickness=thickness, magnetization=magnetization)
+        return _strip_field(x, z, k, thickness, polarization, periods)
+    magnitude = _magnitude(z, period, thickness, polarization)
     return magnitude * jnp.sin(k * x), magnitude * jnp.cos(k * x)
 
 

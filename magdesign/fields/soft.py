@@ -50,6 +50,7 @@ Not modelled: hysteresis and remanence of the soft parts; the cells' own shape i
 curved bodies (staircase).
 """
 
+import warnings
 from typing import Literal
 
 import equinox as eqx
@@ -66,12 +67,16 @@ from magdesign._numerics import (
     SATURATION_SHORTEST_STEP,
     float_array,
 )
-from magdesign._validation import check_last_axis, check_positive
+from magdesign._validation import check_last_axis, check_positive, check_scalar
 from magdesign.fields.cuboid import FAR_NODES, cuboid_tensor
 from magdesign.units import MU0
 
-# The shapes and how many lengths (m) their size holds.
+# The shapes and how many lengths (m) a spec's size holds (cuboid: full sides x, y, z;
+# cylinder: diameter, length; sphere: diameter).
 SIZE_LENGTHS = {"cuboid": 3, "cylinder": 2, "sphere": 1}
+# The keywords that size each shape in the Python API, as the field functions do: round
+# bodies by radius (and height along the axis), blocks by their full sides.
+SIZE_KEYWORDS = {"cuboid": ("dimension",), "cylinder": ("radius", "height"), "sphere": ("radius",)}
 # The most cells a body may have: its dense system is (3N)^2 float64 (N = 6000: 2.6 GB).
 MAX_CELLS = 6000
 # The cell kernel's far form holds FAR_NODES^3 point dipoles per (point, cell) pair until
@@ -113,20 +118,41 @@ class SoftBody(eqx.Module):
         return len(self.index) * self.cell_volume
 
 
+def size_keywords(shape: str, size: Float[ArrayLike, "..."]) -> dict:
+    """The keywords of :func:`soft_body` for a spec's ``size`` of a ``shape`` (SIZE_LENGTHS:
+    a cuboid's full sides, a cylinder's diameter and length, a sphere's diameter; m)."""
+    if shape not in SIZE_LENGTHS:
+        raise ValueError(f"shape must be one of {tuple(SIZE_LENGTHS)}, got {shape!r}")
+    size = float_array(size).reshape(-1)
+    if size.shape != (SIZE_LENGTHS[shape],):
+        raise ValueError(f"size of a {shape} must hold {SIZE_LENGTHS[shape]} length(s) (m), got shape {size.shape}")
+    if shape == "cuboid":
+        return {"dimension": size}
+    return {"radius": 0.5 * size[0], "height": size[1]} if shape == "cylinder" else {"radius": 0.5 * size[0]}
+
+
 def soft_body(
     shape: Literal["cuboid", "cylinder", "sphere"],
-    size: Float[ArrayLike, "..."],
+    size: Float[ArrayLike, "..."] | None = None,
     *,
     cells: int | tuple[int, int, int],
     permeability: float | Float[ArrayLike, ""],
     saturation: float | Float[ArrayLike, ""] | None = None,
+    radius: Float[ArrayLike, ""] | None = None,
+    height: Float[ArrayLike, ""] | None = None,
+    dimension: Float[ArrayLike, "3"] | None = None,
 ) -> SoftBody:
-    """A soft body split into cells.
+    """A soft body split into cells, in its own frame (centre at the origin).
 
     Args:
-        shape: "cuboid" (size: full sides x, y, z, m), "cylinder" (size: diameter,
-            length, m; axis along z) or "sphere" (size: diameter, m).
-        size: as above (m), each > 0. May be traced (the cells scale with it).
+        shape: "cuboid" (``dimension=``: full sides x, y, z), "cylinder" (``radius=``,
+            ``height=``; axis along z) or "sphere" (``radius=``), as the field functions
+            size their bodies (docs/models.md, "Conventions").
+        radius, height, dimension: the sizes (m), each > 0, the ones ``shape`` takes. May
+            be traced (the cells scale with them).
+        size: deprecated (it warns): the sizes as a spec writes them, a cuboid's full
+            sides, a cylinder's diameter and length, a sphere's diameter (m); see
+            :func:`size_keywords`.
         cells: cells along the body's longest side (the others in proportion, at least
             one), or (n_x, n_y, n_z) explicitly.
         permeability: relative permeability mu_r (> 0).
@@ -138,17 +164,23 @@ def soft_body(
     """
     if shape not in SIZE_LENGTHS:
         raise ValueError(f"shape must be one of {tuple(SIZE_LENGTHS)}, got {shape!r}")
-    size = float_array(size).reshape(-1)
-    wanted = SIZE_LENGTHS[shape]
-    if size.shape != (wanted,):
-        raise ValueError(f"size of a {shape} must hold {wanted} length(s) (m), got shape {size.shape}")
-    check_positive(size=size, unit="m")
+    if size is not None:
+        wanted = " and ".join(f"{name}=" for name in SIZE_KEYWORDS[shape])
+        warnings.warn(
+            f"soft_body(shape, size) is deprecated (size holds diameters); give a {shape} its {wanted} "
+            f"(soft.size_keywords(shape, size) converts)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        if radius is not None or height is not None or dimension is not None:
+            raise TypeError("soft_body(): give size or radius= / height= / dimension=, not both")
+        radius, height, dimension = (size_keywords(shape, size).get(n) for n in ("radius", "height", "dimension"))
+    sides = _sides(shape, radius=radius, height=height, dimension=dimension)
     check_positive(permeability=permeability)
     if saturation is not None:
         check_positive(saturation=saturation, unit="T")
         check_positive(**{"permeability - 1 (a saturating body needs mu_r > 1)": jnp.asarray(permeability) - 1.0})
-        saturation = jnp.asarray(saturation, dtype=size.dtype)
-    sides = {"cuboid": size, "cylinder": size[jnp.array([0, 0, 1])], "sphere": jnp.repeat(size, 3)}[shape]
+        saturation = jnp.asarray(saturation, dtype=sides.dtype)
     grid = _grid(sides, cells)
     indices = np.indices(grid).reshape(3, -1).T
     centre = (indices - (np.asarray(grid) - 1) / 2.0) / np.asarray(grid)  # in body sides
@@ -179,6 +211,28 @@ def soft_body(
         index=index,
         saturation=saturation,
     )
+
+
+def _sides(shape, **sizes):
+    """The full sides (3,) (m) of the box that holds a ``shape`` of the given sizes (the
+    keywords of SIZE_KEYWORDS[shape], each checked)."""
+    wanted = SIZE_KEYWORDS[shape]
+    given = [name for name, value in sizes.items() if value is not None]
+    if sorted(given) != sorted(wanted):
+        names = " and ".join(f"{name}=" for name in wanted)
+        raise ValueError(f"a {shape} takes {names} (m), got {', '.join(f'{n}=' for n in given) or 'none'}")
+    if shape == "cuboid":
+        check_last_axis("dimension", sizes["dimension"], 3)
+        sides = float_array(sizes["dimension"])
+        if sides.shape != (3,):
+            raise ValueError(f"dimension must have shape (3,), got shape {sides.shape}")
+        check_positive(dimension=sides, unit="m")
+        return sides
+    check_scalar("one body per call", **{name: sizes[name] for name in wanted})
+    check_positive(unit="m", **{name: sizes[name] for name in wanted})
+    diameter = 2.0 * float_array(sizes["radius"])
+    length = float_array(sizes["height"]) if shape == "cylinder" else diameter
+    return jnp.stack([diameter, diameter, length.astype(diameter.dtype)])
 
 
 def _grid(sides, cells):

@@ -9,6 +9,7 @@ sensor). [design] is ignored. The [magnet] table's ``shape`` picks the scene typ
 """
 
 import dataclasses
+import math
 
 import equinox as eqx
 import jax
@@ -16,7 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from magdesign.fields.cylinder import FIDELITIES as CYLINDER_FIDELITIES
-from magdesign.fields.soft import SIZE_LENGTHS, soft_body
+from magdesign.fields.soft import SIZE_LENGTHS, size_keywords, soft_body
 from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, time_constant_from_pole
 from magdesign.mechanics.dome import BASES as DOME_BASES
 from magdesign.mechanics.dome import FIDELITIES as DOME_FIDELITIES
@@ -31,6 +32,7 @@ from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions
 from magdesign.spec.keys import KEYS, fields
+from magdesign.spec.sizes import check_fits
 from magdesign.units import SpecError, echo, uT
 
 # The scene's tables (all of the key table's but [design]) and the sensor parts by model.
@@ -97,15 +99,57 @@ def check_carried(gap, height, mechanics):
             )
 
 
+def check_magnet_fits(radius, outer_radius, key="magnet.radius"):
+    """SpecError naming ``key`` unless a magnet of ``radius`` (m) is narrower than the dome
+    of ``outer_radius`` (m) whose apex carries it."""
+    if not radius < outer_radius:
+        raise SpecError(
+            f"{key}: a magnet of radius {radius * 1e3:g} mm is wider than the dome that carries it "
+            f"(mechanics.outer_radius = {outer_radius * 1e3:g} mm); expected a radius below the dome's"
+        )
+
+
+def check_solids(positions, magnet, parts, magnet_angles=None):
+    """SpecError unless the sensors lie outside the magnet and the magnet and soft parts lie
+    apart. ``positions`` (S, 3) sensor points (m); ``magnet`` (centre (3,), radius, height)
+    (m); ``parts`` [(key, centre (3,), inscribed radius)] of the [[soft]] parts. A body is
+    judged by the ball inside it (a rotated magnet's and every soft part's), so a refusal
+    is never wrong: two bodies whose balls overlap overlap."""
+    centre, radius, height = np.asarray(magnet[0], float), float(magnet[1]), float(magnet[2])
+    relative = np.asarray(positions, float) - centre
+    if magnet_angles is None:  # the axial cylinder itself
+        inside = (np.hypot(relative[:, 0], relative[:, 1]) < radius) & (np.abs(relative[:, 2]) < height / 2)
+    else:
+        inside = np.linalg.norm(relative, axis=1) < min(radius, height / 2)
+    if np.any(inside):
+        point = np.asarray(positions)[np.argmax(inside)] * 1e3
+        raise SpecError(
+            f"sensor.positions: the sensor at [{point[0]:g}, {point[1]:g}, {point[2]:g}] mm lies inside the magnet "
+            f"(magnet.radius = {radius * 1e3:g} mm, magnet.height = {height * 1e3:g} mm, centre "
+            f"{centre[2] * 1e3:g} mm above the chips: geometry.gap + height / 2); expected every sensor outside it"
+        )
+    balls = [("the magnet", centre, min(radius, height / 2))]
+    balls += [(key, np.asarray(c, float), float(r)) for key, c, r in parts]
+    for i, (a, centre_a, radius_a) in enumerate(balls):
+        for b, centre_b, radius_b in balls[i + 1 :]:
+            if np.linalg.norm(centre_a - centre_b) < radius_a + radius_b:
+                raise SpecError(
+                    f"{b}: it overlaps {a} (centres {np.linalg.norm(centre_a - centre_b) * 1e3:g} mm apart, "
+                    f"closer than the {radius_a * 1e3:g} mm and {radius_b * 1e3:g} mm that each reaches in every "
+                    "direction); expected solid parts apart"
+                )
+
+
 def _mechanics(spec, fidelity, models=("dome", "layer")):
     table = Table(spec, "mechanics")
     model = table.choice("model", models)
     if model == "dome":
         levels = DOME_FIDELITIES
-        check_wall(table.quantity("thickness", "m"), table.quantity("outer_radius", "m"))
+        outer_radius, thickness = table.quantity("outer_radius", "m"), table.quantity("thickness", "m")
+        check_wall(thickness, outer_radius)
         mechanics = Dome(
-            outer_radius=jnp.asarray(table.quantity("outer_radius", "m")),
-            thickness=jnp.asarray(table.quantity("thickness", "m")),
+            outer_radius=jnp.asarray(outer_radius),
+            thickness=jnp.asarray(thickness),
             material=_material(table),
             fidelity=table.choice("fidelity", levels, default="reissner"),
             base=table.choice("base", DOME_BASES, default="bonded"),
@@ -252,9 +296,14 @@ SOFT_CELLS = 8
 
 
 def _soft_grid(key, shape, size, cells, permeability):
-    """The cell grid of a soft body, or a SpecError naming ``key``."""
+    """The cell grid of a soft body, or a SpecError naming ``key`` (a size that cannot fit:
+    the dense interaction matrix of its n cells, (3 n)^2 values; ``cells`` along the longest
+    side, the others in proportion)."""
+    sides = {"cuboid": size, "cylinder": [size[0], size[0], size[-1]], "sphere": [size[0]] * 3}[shape]
+    count = math.prod(max(1, round(int(cells) * side / max(sides))) for side in sides)
+    check_fits(f"{key} = {cells}", (3.0 * count) ** 2, what="the cells' interaction matrix")
     try:
-        return soft_body(shape, size, cells=cells, permeability=permeability).grid
+        return soft_body(shape, **size_keywords(shape, size), cells=cells, permeability=permeability).grid
     except ValueError as error:
         raise SpecError(f"{key}: {error}") from None
 
@@ -357,6 +406,18 @@ def _cylinder_scene(spec, fidelity):
     gap = geometry.quantity("gap", "m")
     geometry.done()
     check_carried(gap, height, mechanics)
+    if isinstance(mechanics, Dome):
+        check_magnet_fits(radius, float(mechanics.outer_radius))
+    magnet_centre = np.array([0.0, 0.0, gap + height / 2]) + (0.0 if offset is None else np.asarray(offset))
+    check_solids(
+        positions,
+        (magnet_centre, radius, height),
+        [
+            (f"soft[{i}]", np.asarray(part.centre, float), min(map(float, part.size)) / 2)
+            for i, part in enumerate(parts)
+        ],
+        magnet_angles,
+    )
     inductors = None
     if "inductors" in spec:
         table = Table(spec, "inductors")
@@ -439,6 +500,11 @@ def _pole_scene(spec, fidelity):
             f"pole.length: a {length * 1e3:g} mm rod does not fit in a ball of radius "
             f"{ball_radius * 1e3:g} mm; expected at most its diameter"
         )
+    if not diameter < 2.0 * ball_radius:
+        raise SpecError(
+            f"pole.diameter: a rod of diameter {diameter * 1e3:g} mm does not fit in a ball of radius "
+            f"{ball_radius * 1e3:g} mm (pole.ball_radius); expected a diameter below the ball's"
+        )
     level = pole.choice("fidelity", ("reduced", "moments"), default="reduced")
     demag = permeability = rod_cells = saturation = None
     if level == "reduced":
@@ -486,6 +552,35 @@ def _pole_scene(spec, fidelity):
     )
 
 
+def check_carried_loads(scene, loads):
+    """SpecError naming the [load] key of a shear force that ``scene``'s mechanics does not
+    carry: a dome's model takes the normal load only (a shear would be dropped, the magnet
+    left in place), the pole's spring tilts the ball about one axis (shear_x only)."""
+    shear = np.abs(np.asarray(loads.shear)).max(axis=0)
+    dome = isinstance(getattr(scene, "mechanics", None), Dome)
+    carried = (0,) if isinstance(scene, PoleScene) else () if dome else (0, 1)
+    for axis, name in enumerate(("shear_x", "shear_y")):
+        if shear[axis] > 0.0 and axis not in carried:
+            model = "the dome model carries normal load only" if not carried else "the model carries shear_x only"
+            raise SpecError(f"load.{name}: {model}; a {shear[axis]:g} N shear would be dropped without a word")
+
+
+def check_field_samples(scene, points):
+    """SpecError (a size that cannot fit in memory) or SizeWarning (a long run) for the field
+    samples a simulation of ``scene`` over ``points`` load points takes: points x sensors x
+    quadrature points per chip x 3 components (:func:`magdesign.spec.sizes.check_fits`)."""
+    if isinstance(scene, FilmScene):
+        sensors = int(np.prod(scene.grid))
+    else:
+        sensors = int(np.shape(getattr(scene, "sensor_positions", np.zeros((1, 3))))[0])
+    quadrature = max((effect.points for effect in scene.effects if effect.name == "area_averaging"), default=1)
+    check_fits(
+        f"load.points = {points}, {sensors} sensors, scene.quadrature = {quadrature}",
+        3.0 * points * sensors * quadrature**2,
+        what="the field samples",
+    )
+
+
 _SCENES = {"cylinder": _cylinder_scene, "film": _film_scene, "plate": _pole_scene}
 
 
@@ -496,13 +591,16 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
     :class:`~magdesign.units.SpecError` (one line, naming the key) on bad input.
     """
     check_tables(spec, TABLES)
-    points = loads_from_spec(spec).normal.shape[0]  # a bad [load] table is a bad spec, whatever runs next
+    loads = loads_from_spec(spec)  # a bad [load] table is a bad spec, whatever runs next
+    points = loads.normal.shape[0]
     shape = Table(spec, "magnet").choice("shape", tuple(_SCENES))
     if "soft" in spec and shape != "cylinder":
         raise SpecError(
             f"soft: [[soft]] parts are magnetised by cylinder magnets (magnet.shape = 'cylinder'), not a {shape}"
         )
     scene = _SCENES[shape](spec, fidelity)
+    check_carried_loads(scene, loads)
+    check_field_samples(scene, points)
     # a time derivative (the inductors' EMF) or a lag needs a time series
     needs_series = [
         name

@@ -111,7 +111,7 @@ class FilmScene(AbstractScene):
             depth,
             period=self.period,
             thickness=self.film_thickness,
-            magnetization=self.magnetization,
+            polarization=self.magnetization,
             periods=self.periods,
         )
         # back to the scene frame: its z axis is the film frame's depth axis reversed

@@ -6,6 +6,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from magdesign.scene._spec import Table
+from magdesign.spec.sizes import check_fits
 from magdesign.units import SpecError
 
 
@@ -46,6 +47,11 @@ def _sweep(table, key, unit, count):
     return np.zeros(count) if pair is None else np.linspace(*pair, count)
 
 
+# Values a load point carries: normal, shear (2), contact (2), time, and the displacement (3)
+# and readings that a simulation of it gives.
+LOAD_COLUMNS = 12
+
+
 def loads_from_spec(spec: dict) -> Loads:
     """The [load] table as a :class:`Loads` sweep.
 
@@ -56,6 +62,7 @@ def loads_from_spec(spec: dict) -> Loads:
     """
     table = Table(spec, "load", required=False)
     points = table.integer("points", default=11)
+    check_fits(f"load.points = {points}", points * LOAD_COLUMNS, what="the load sweep's arrays")
     normal = _sweep(table, "normal", "N", points)
     shear = np.stack([_sweep(table, "shear_x", "N", points), _sweep(table, "shear_y", "N", points)], axis=-1)
     contact = np.stack([_sweep(table, "contact_x", "m", points), _sweep(table, "contact_y", "m", points)], axis=-1)

@@ -98,7 +98,7 @@ class SoftPart(eqx.Module):
     def body(self) -> soft.SoftBody:
         return soft.soft_body(
             self.shape,
-            jnp.stack(self.size),
+            **soft.size_keywords(self.shape, jnp.stack(self.size)),
             cells=self.grid,
             permeability=self.permeability,
             saturation=self.saturation,

@@ -13,7 +13,7 @@ import equinox as eqx
 from jaxtyping import Array, Float
 
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable
-from magdesign.fields import cylinder_on_axis
+from magdesign.fields import cylinder_axial
 from magdesign.mechanics import DomeResult, MooneyRivlin, dome_compliance
 from magdesign.scene import MECHANICS_CONVERGED
 from magdesign.units import mm, mT
@@ -32,7 +32,7 @@ class DomeHallModel(eqx.Module):
     fidelity: str = eqx.field(static=True, default="reissner")
 
     def field(self, z):
-        return cylinder_on_axis(z, radius=self.radius, height=self.height, remanence=self.remanence)
+        return cylinder_axial(z + self.height / 2, radius=self.radius, height=self.height, polarization=self.remanence)
 
     def __call__(self, values: dict[str, Float[Array, ""]]) -> dict[str, Float[Array, ""]]:
         compliance, result = dome_compliance(

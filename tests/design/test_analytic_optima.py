@@ -15,7 +15,7 @@ from scipy.optimize import brentq
 
 from magdesign.design import Limit, Objective, Problem, Target, Variable, multistart, solve, sweep
 from magdesign.design.problem import per_problem
-from magdesign.fields import cylinder_on_axis, film_magnitude
+from magdesign.fields import cylinder_axial, film_magnitude
 from magdesign.mechanics import dome_compliance
 from magdesign.units import mm, mT
 
@@ -51,7 +51,7 @@ FIELD_MODEL_DTYPES = []
 
 def field_model(v):
     FIELD_MODEL_DTYPES.append(v["gap"].dtype)
-    return {"field": cylinder_on_axis(v["gap"], radius=R, height=D, remanence=BR)}
+    return {"field": cylinder_axial(v["gap"] + D / 2, radius=R, height=D, polarization=BR)}
 
 
 # Problems shared by several tests: a problem's compiled solver is reused for new starts,
@@ -117,7 +117,7 @@ PERIOD, FILM, FRACTION = 6 * mm, 0.5 * mm, 0.02
 
 
 def fraction(depth, period):
-    kwargs = dict(period=period, thickness=FILM, magnetization=1.0)
+    kwargs = dict(period=period, thickness=FILM, polarization=1.0)
     return film_magnitude(depth, **kwargs) / film_magnitude(0.0, **kwargs)
 
 

@@ -7,6 +7,7 @@ import json
 import socket
 import subprocess
 import sys
+import time
 
 import equinox as eqx
 import jax
@@ -133,6 +134,42 @@ def test_list_of_points_and_small_chunks_agree_with_one_batch():
     assert list(chunked.status) == list(listed.status)
 
 
+def test_a_sweep_of_a_few_points_moves_its_bar_per_point_with_the_answers_of_one_batch(cheap_spec, monkeypatch):
+    """15 points go in chunks of one (the bar moves 15 times, not once at the end), and each
+    point's answer is, bit for bit, the one it gets in a batch of 16 lanes (the same 15
+    points repeated 16 times go in chunks of 16 copies of one point; the sweep of 15 went in
+    one chunk of 16 before)."""
+    moves = []
+
+    class Bar:
+        def __init__(self, *args, **kwargs):
+            pass
+
+        def update(self, points):
+            moves.append(points)
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(solver, "tqdm", Bar)
+    problem, _ = problem_from_spec(load_spec(cheap_spec))
+    fields = np.linspace(3 * mT, 6 * mT, 15)
+    few = sweep(problem, {"field_rest": fields}, progress=True)
+    assert moves == [1] * 15
+    many = sweep(problem, {"field_rest": np.repeat(fields, 16)}, progress=True)
+    assert moves[15:] == [16] * 15
+    assert few.successful.all()
+    np.testing.assert_array_equal(many.status[::16], few.status)
+    np.testing.assert_array_equal(many.steps[::16], few.steps)
+    for name in few.parameters:
+        np.testing.assert_array_equal(many.parameters[name][::16], few.parameters[name])
+    for name in few.outputs:
+        np.testing.assert_array_equal(many.outputs[name][::16], few.outputs[name])
+    for key, column in few.derivatives.items():
+        for name in column:
+            np.testing.assert_array_equal(many.derivatives[key][name][::16], column[name])
+
+
 def cubic_problem():
     """x solves x^3 + a x = b by Newton's method in a loop of the model's own, and b is
     free: the optimum for a target X on x is b = X^3 + a X, with db/dX = 3 X^2 + a and
@@ -153,6 +190,53 @@ def cubic_problem():
         return {"x": x}
 
     return Problem(model, [Variable("b", 0.0, 100.0, 1.0)], targets=[Target("x", 1.0)], fixed={"a": 2.0})
+
+
+@pytest.mark.skipif(jax.default_backend() != "cpu", reason="models with loops go a point at a time on a CPU only")
+def test_a_sweep_a_point_at_a_time_moves_its_bar_per_point_and_stops_soon_when_interrupted(monkeypatch):
+    """40 points a point at a time (runs of DESIGN_CHAIN on threads): the bar moves by one
+    point 40 times; Ctrl-C (a KeyboardInterrupt, here raised by the bar at its 3rd move)
+    stops the sweep after the points the threads are solving (each made to take 0.1 s
+    here), not after every point."""
+    monkeypatch.setattr(solver, "DESIGN_POINT_SECONDS", 0.0)
+    one_by_one = solver._one_by_one
+
+    class Slow:
+        def __init__(self, program):
+            self.program, self.memory_analysis = program, program.memory_analysis
+
+        def __call__(self, *args):
+            time.sleep(0.1)
+            solves.append(1)
+            return self.program(*args)
+
+    monkeypatch.setattr(solver, "_one_by_one", lambda host, program, *rest: one_by_one(host, Slow(program), *rest))
+    moves, interrupt_at, solves = [], [], []
+
+    class Bar:
+        def __init__(self, *args, **kwargs):
+            pass
+
+        def update(self, points):
+            moves.append(points)
+            if len(moves) in interrupt_at:
+                raise KeyboardInterrupt
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(solver, "tqdm", Bar)
+    targets = {"x": np.linspace(0.5, 2.0, 40)}
+    assert sweep(cubic_problem(), targets, progress=True).successful.all()
+    assert moves == [1] * 40
+    moves.clear()
+    solves.clear()
+    interrupt_at.append(3)
+    with pytest.raises(KeyboardInterrupt):
+        sweep(cubic_problem(), targets, progress=True)
+    # the threads stop after their current points: the last run of DESIGN_CHAIN points, which
+    # the threads reach a second or more after the interrupt, never starts
+    assert len(solves) <= 40 - solver.DESIGN_CHAIN
 
 
 @pytest.mark.skipif(jax.default_backend() != "cpu", reason="models with loops go a point at a time on a CPU only")

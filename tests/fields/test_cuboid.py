@@ -329,3 +329,8 @@ def test_bad_arguments():
         cuboid(np.zeros(3), dimension=(1.0, 0.0, 1.0), polarization=J)
     with pytest.raises(ValueError, match="polarization"):
         cuboid(np.zeros(3), dimension=SIDES, polarization=1.0)
+    points = np.zeros((5, 3)) + [0.0, 0.0, 1e-2]
+    with pytest.raises(ValueError, match=r"dimension has shape \(4, 3\), which does not broadcast with points"):
+        cuboid(points, dimension=np.ones((4, 3)) * 1e-3, polarization=J)
+    with pytest.raises(ValueError, match=r"polarization has shape \(4, 3\), which does not broadcast with points"):
+        cuboid(points, dimension=SIDES, polarization=np.ones((4, 3)))

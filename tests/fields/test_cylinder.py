@@ -1,4 +1,4 @@
-"""Physics and accuracy tests of magdesign.fields.cylinder and cylinder_on_axis.
+"""Physics and accuracy tests of magdesign.fields.cylinder and cylinder_axial.
 
 References: 40-digit values from an independent integration over the side wall
 (references/make_cylinder_references.py writes references/cylinder.json), magpylib, and
@@ -15,7 +15,7 @@ import magpylib
 import numpy as np
 import pytest
 
-from magdesign.fields import cylinder, cylinder_on_axis, dipole
+from magdesign.fields import cylinder, cylinder_axial, cylinder_on_axis, dipole
 from magdesign.fields._special import MULTIPOLE_SWITCH
 from magdesign.units import MU0
 
@@ -35,13 +35,14 @@ def rel_err(a, b):
     return np.linalg.norm(a - b, axis=-1) / np.linalg.norm(b, axis=-1)
 
 
-def on_axis_reference(z, radius, height, remanence):
-    """The dome-Hall paper's Eq. 1 (on-axis field) evaluated as written, in 60-digit decimal arithmetic."""
+def on_axis_reference(z, radius, height, polarization):
+    """The dome-Hall paper's Eq. 1 (on-axis field) evaluated as written, in 60-digit decimal
+    arithmetic, at ``z`` from the magnet's centre (u, v: heights above the bottom and top face)."""
     getcontext().prec = 60
     z, r, h = Decimal(z), Decimal(radius), Decimal(height)
-    u = h + z
-    value = u / (r * r + u * u).sqrt() - z / (r * r + z * z).sqrt()
-    return float(Decimal(remanence) / 2 * value)
+    u, v = z + h / 2, z - h / 2
+    value = u / (r * r + u * u).sqrt() - v / (r * r + v * v).sqrt()
+    return float(Decimal(polarization) / 2 * value)
 
 
 REFERENCES = json.loads((Path(__file__).parent / "references" / "cylinder.json").read_text())["cases"]
@@ -84,7 +85,7 @@ def test_a_thin_disc_on_its_axis_keeps_its_digits():
     value = cylinder(jnp.array([0.0, 0.0, 3.16e-3]), radius=1e-3, height=1e-9, polarization=1.0)[2]
     assert float(value) == pytest.approx(expected, rel=1e-12)
     # and the on-axis closed form (its two terms evaluated without cancellation) agrees
-    assert float(cylinder_on_axis(3.16e-3 - 0.5e-9, radius=1e-3, height=1e-9, remanence=1.0)) == pytest.approx(
+    assert float(cylinder_axial(3.16e-3, radius=1e-3, height=1e-9, polarization=1.0)) == pytest.approx(
         expected, rel=1e-12
     )
 
@@ -124,13 +125,14 @@ def test_inside_the_magnet_agrees_with_magpylib():
 
 
 def test_dome_hall_saturation_distance():
-    assert cylinder_on_axis(5.8458e-3, radius=1.5e-3, height=1e-3, remanence=1.17) == pytest.approx(4.800e-3, abs=5e-7)
+    """5.8458 mm above the top face of the 1 mm magnet: 6.3458 mm from its centre."""
+    assert cylinder_axial(6.3458e-3, radius=1.5e-3, height=1e-3, polarization=1.17) == pytest.approx(4.800e-3, abs=5e-7)
 
 
 @pytest.mark.parametrize("z_over_r", [-0.9, -0.5, -1e-3, 0.0, 1e-3, 0.3, 2.0, 37.0, 1e3, 1e6])
 def test_on_axis_closed_form_is_precise_everywhere(z_over_r):
-    z = z_over_r * R
-    assert float(cylinder_on_axis(z, radius=R, height=D, remanence=J)) == pytest.approx(
+    z = D / 2 + z_over_r * R  # z_over_r radii above the top face
+    assert float(cylinder_axial(z, radius=R, height=D, polarization=J)) == pytest.approx(
         on_axis_reference(z, R, D, J), rel=1e-14
     )
 
@@ -139,7 +141,7 @@ def test_equals_on_axis_form_on_the_axis():
     z_top = np.concatenate([-np.linspace(0.01, 0.99, 7) * D, np.geomspace(1e-6, 1e6, 40) * R])
     points = np.stack([0 * z_top, 0 * z_top, z_top + D / 2], -1)
     b = field(points)
-    expected = np.asarray(cylinder_on_axis(z_top, radius=R, height=D, remanence=J))
+    expected = np.asarray(cylinder_axial(z_top + D / 2, radius=R, height=D, polarization=J))
     assert np.all(b[:, :2] == 0)
     np.testing.assert_allclose(b[:, 2], expected, rtol=1e-13)
 
@@ -355,7 +357,7 @@ def test_gradients_on_the_axis_are_correct():
     # B_x = x dB_x/dx + ...: on the axis dB_x/dx = dB_y/dy = -dB_z/dz / 2 (div B = 0)
     p = jnp.array([0.0, 0.0, 2 * D])
     jac = np.asarray(jax.jacrev(lambda q: cylinder(q, radius=R, height=D, polarization=J))(p))
-    dbz = jax.grad(lambda z: cylinder_on_axis(z - D / 2, radius=R, height=D, remanence=J))(2 * D)
+    dbz = jax.grad(lambda z: cylinder_axial(z, radius=R, height=D, polarization=J))(2 * D)
     np.testing.assert_allclose(np.diag(jac), [-dbz / 2, -dbz / 2, dbz], rtol=1e-12)
 
 
@@ -364,18 +366,18 @@ def test_on_axis_derivatives_equal_their_closed_forms():
     bracket's derivatives worked out by hand (float64, at distances where they lose no
     digits): inside the magnet, at its centre (where the same-sign form's denominator
     vanishes), on both faces, above it and below it."""
-    z = np.array([-D / 2, -0.9 * D, -0.1 * D, -D, 0.0, 1e-6 * D, 0.3 * D, 2.0 * D, 7.4e-3, -1.3 * D, -3.0 * D])
-    u = D + z
-    s_u, s_v = np.hypot(R, u), np.hypot(R, z)
+    z = np.array([0.0, -0.4 * D, 0.4 * D, -D / 2, D / 2, 0.500001 * D, 0.8 * D, 2.5 * D, 7.9e-3, -0.8 * D, -2.5 * D])
+    u, v = z + D / 2, z - D / 2  # the heights above the bottom and the top face
+    s_u, s_v = np.hypot(R, u), np.hypot(R, v)
     expected = {
         "z": R**2 * (1 / s_u**3 - 1 / s_v**3),
-        "radius": -R * (u / s_u**3 - z / s_v**3),
-        "height": R**2 / s_u**3,
-        "zz": -3 * R**2 * (u / s_u**5 - z / s_v**5),
+        "radius": -R * (u / s_u**3 - v / s_v**3),
+        "height": R**2 * (1 / s_u**3 + 1 / s_v**3) / 2,  # the faces move apart by dD / 2 each
+        "zz": -3 * R**2 * (u / s_u**5 - v / s_v**5),
     }
 
     def bracket(z, radius, height):
-        return 2 * cylinder_on_axis(z, radius=radius, height=height, remanence=1.0)
+        return 2 * cylinder_axial(z, radius=radius, height=height, polarization=1.0)
 
     first = jax.vmap(jax.grad(bracket, argnums=(0, 1, 2)), in_axes=(0, None, None))(z, R, D)
     second = jax.vmap(jax.grad(jax.grad(bracket)), in_axes=(0, None, None))(z, R, D)
@@ -470,12 +472,12 @@ def test_second_derivatives_on_and_near_the_axis_are_finite_and_agree():
     assert np.all(np.isfinite(on_axis)) and np.all(np.isfinite(near))
     # off the axis the mixed derivatives grow like (rho / distance) |H|: 1e-7 of it here
     np.testing.assert_allclose(near, on_axis, rtol=1e-6, atol=1e-6 * np.max(np.abs(on_axis)))
-    dz2 = jax.grad(jax.grad(lambda z: cylinder_on_axis(z - D / 2, radius=R, height=D, remanence=J)))(3 * D)
+    dz2 = jax.grad(jax.grad(lambda z: cylinder_axial(z, radius=R, height=D, polarization=J)))(3 * D)
     assert on_axis[2, 2] == pytest.approx(float(dz2), rel=1e-10)
 
 
 def test_on_axis_gradients_match_finite_differences():
-    g = jax.grad(lambda r, h, z: cylinder_on_axis(z, radius=r, height=h, remanence=J), argnums=(0, 1, 2))(R, D, 2e-3)
+    g = jax.grad(lambda r, h, z: cylinder_axial(z, radius=r, height=h, polarization=J), argnums=(0, 1, 2))(R, D, 2e-3)
     for i in range(3):
         step = 1e-8
         args = [R, D, 2e-3]
@@ -499,9 +501,44 @@ def test_bad_input():
     with pytest.raises(ValueError, match="exact"):
         cylinder(np.zeros(3), radius=R, height=D, polarization=J, fidelity="fem")
     with pytest.raises(ValueError, match="radius"):
-        cylinder_on_axis(1e-3, radius=-R, height=D, remanence=J)
+        cylinder_axial(1e-3, radius=-R, height=D, polarization=J)
     with pytest.raises(ValueError, match="height"):
-        cylinder_on_axis(1e-3, radius=R, height=0.0, remanence=J)
+        cylinder_axial(1e-3, radius=R, height=0.0, polarization=J)
+
+
+def test_shapes_that_do_not_broadcast_name_the_argument():
+    """A radius per point is no cylinder field's input (one magnet per call); on the axis
+    the sizes broadcast with z, and a mismatch names the argument, not jnp's internals."""
+    points = np.zeros((5, 3)) + [0.0, 0.0, 2 * D]
+    for fidelity in ("exact", "axis", "dipole"):
+        with pytest.raises(ValueError, match=r"radius must be a scalar \(one magnet per call.*got shape \(3,\)"):
+            cylinder(points, radius=np.full(3, R), height=D, polarization=J, fidelity=fidelity)
+    with pytest.raises(ValueError, match=r"polarization has shape \(4, 3\), which does not broadcast with points"):
+        cylinder(points, radius=R, height=D, polarization=np.ones((4, 3)))
+    with pytest.raises(ValueError, match=r"radius has shape \(3,\), which does not broadcast with z of shape \(5,\)"):
+        cylinder_axial(np.full(5, 2 * D), radius=np.full(3, R), height=D, polarization=J)
+    # sizes that do broadcast: one magnet per z, each its own closed form
+    radii = np.array([1.0, 2.0, 3.0]) * R
+    values = cylinder_axial(2 * D, radius=radii, height=D, polarization=J)
+    expected = [on_axis_reference(2 * D, r, D, J) for r in radii]
+    np.testing.assert_allclose(values, expected, rtol=1e-14)
+
+
+def test_cylinder_on_axis_is_deprecated_and_unchanged():
+    """The old on-axis function (z above the top face, ``remanence=``) still returns Eq. 1
+    in its own coordinate, and warns naming cylinder_axial; ``polarization=`` is accepted."""
+    z_top = 5.8458e-3
+    # the paper's Eq. 1 written out, with z measured from the top face
+    expected = J / 2 * ((D + z_top) / np.sqrt(R**2 + (D + z_top) ** 2) - z_top / np.sqrt(R**2 + z_top**2))
+    with pytest.warns(DeprecationWarning, match=r"cylinder_axial\(z \+ height / 2.*polarization="):
+        old = float(cylinder_on_axis(z_top, radius=R, height=D, remanence=J))
+    with pytest.warns(DeprecationWarning, match="cylinder_axial"):
+        renamed = float(cylinder_on_axis(z_top, radius=R, height=D, polarization=J))
+    new = float(cylinder_axial(z_top + D / 2, radius=R, height=D, polarization=J))
+    assert old == pytest.approx(expected, rel=1e-14)
+    assert renamed == old and new == pytest.approx(expected, rel=1e-14)
+    with pytest.raises(TypeError, match="give polarization="):
+        cylinder_on_axis(z_top, radius=R, height=D, polarization=J, remanence=J)
 
 
 def test_points_as_a_nested_list_holding_traced_values():

@@ -29,3 +29,5 @@ def test_bad_shapes():
         dipole(np.zeros((2, 2)), np.ones(3))
     with pytest.raises(ValueError, match="moment"):
         dipole(np.zeros(3), np.ones(2))
+    with pytest.raises(ValueError, match=r"moment has shape \(4, 3\), which does not broadcast with points"):
+        dipole(np.zeros((5, 3)), np.ones((4, 3)))

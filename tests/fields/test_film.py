@@ -22,7 +22,7 @@ from magdesign.fields import film, film_angle, film_magnitude
 
 T, THICKNESS, J0 = 6e-3, 0.5e-3, 0.1
 K = 2 * np.pi / T
-PARAMS = dict(period=T, thickness=THICKNESS, magnetization=J0)
+PARAMS = dict(period=T, thickness=THICKNESS, polarization=J0)
 QUAD = dict(epsabs=0.0, epsrel=1e-12, limit=200)
 
 
@@ -116,7 +116,7 @@ def test_magnitude_from_the_bottom_face_and_thin_film():
     assert float(film_magnitude(2e-3 - THICKNESS, **PARAMS)) == pytest.approx(
         J0 * (np.exp(K * THICKNESS) - 1) * np.exp(-K * 2e-3), rel=1e-14
     )
-    thin = float(film_magnitude(0.0, period=T, thickness=1e-12, magnetization=J0))
+    thin = float(film_magnitude(0.0, period=T, thickness=1e-12, polarization=J0))
     assert thin == pytest.approx(J0 * K * 1e-12, rel=1e-9)
 
 
@@ -158,8 +158,25 @@ def test_finite_film_is_finite_on_its_face_and_at_its_corners():
 
 def test_bad_input():
     with pytest.raises(ValueError, match="period"):
-        film(0.0, 0.0, period=0.0, thickness=THICKNESS, magnetization=J0)
+        film(0.0, 0.0, period=0.0, thickness=THICKNESS, polarization=J0)
     with pytest.raises(ValueError, match="thickness"):
-        film(0.0, 0.0, period=T, thickness=-1.0, magnetization=J0)
+        film(0.0, 0.0, period=T, thickness=-1.0, polarization=J0)
     with pytest.raises(ValueError, match="periods"):
         film(0.0, 0.0, **PARAMS, periods=0)
+    with pytest.raises(ValueError, match=r"z has shape \(3,\), which does not broadcast with x of shape \(5,\)"):
+        film(np.zeros(5), np.ones(3) * 1e-3, **PARAMS)
+
+
+def test_magnetization_is_the_deprecated_name_of_polarization():
+    """``magnetization=`` (J0 in T) still works, warns naming ``polarization=`` and gives
+    the closed form J0 (1 - e^{-kd}) e^{-kz} (sin kx, cos kx)."""
+    x, z = T / 8, 2e-3
+    magnitude = J0 * (1 - np.exp(-K * THICKNESS)) * np.exp(-K * z)
+    with pytest.warns(DeprecationWarning, match="use polarization="):
+        bx, bz = film(x, z, period=T, thickness=THICKNESS, magnetization=J0)
+    with pytest.warns(DeprecationWarning, match="use polarization="):
+        old = film_magnitude(z, period=T, thickness=THICKNESS, magnetization=J0)
+    assert float(old) == pytest.approx(magnitude, rel=1e-14)
+    np.testing.assert_allclose([bx, bz], [magnitude * np.sin(K * x), magnitude * np.cos(K * x)], rtol=1e-14)
+    with pytest.raises(TypeError, match="give polarization= only"):
+        film(x, z, period=T, thickness=THICKNESS, magnetization=J0, polarization=J0)

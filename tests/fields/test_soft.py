@@ -47,7 +47,7 @@ def test_prism_demagnetizing_factors_against_aharoni(case):
     sides = 2e-3 * np.array(case["half_sides"])
     errors = []
     for cells in (8, 16):
-        tensor = np.asarray(demagnetizing(soft.soft_body("cuboid", sides, cells=cells, permeability=2.0)))
+        tensor = np.asarray(demagnetizing(soft.soft_body("cuboid", dimension=sides, cells=cells, permeability=2.0)))
         errors.append(np.max(np.abs(np.diag(tensor) - exact)))
         np.testing.assert_allclose(tensor - np.diag(np.diag(tensor)), 0.0, atol=1e-14)
         np.testing.assert_allclose(np.trace(tensor), 1.0, atol=1e-12)
@@ -66,7 +66,9 @@ def test_cylinder_demagnetizing_factors_against_the_closed_form(case):
         abs(
             float(
                 demagnetizing(
-                    soft.soft_body("cylinder", [diameter, case["gamma"] * diameter], cells=n, permeability=2.0)
+                    soft.soft_body(
+                        "cylinder", radius=diameter / 2, height=case["gamma"] * diameter, cells=n, permeability=2.0
+                    )
                 )[2, 2]
             )
             / exact
@@ -88,7 +90,7 @@ def test_sphere_in_a_uniform_field(permeability, tolerance):
     exact = 3.0 * chi / (3.0 + chi) * field[2] / MU0
     errors = []
     for cells in (8, 12):
-        body = soft.soft_body("sphere", 2e-3, cells=cells, permeability=permeability)
+        body = soft.soft_body("sphere", radius=1e-3, cells=cells, permeability=permeability)
         magnetization = np.asarray(solve(body, jnp.broadcast_to(field, (len(body.index), 3))))
         errors.append(abs(magnetization[:, 2].mean() / exact - 1))
         np.testing.assert_allclose(magnetization[:, :2].mean(0), 0.0, atol=1e-9 * exact)
@@ -121,7 +123,7 @@ def test_force_on_a_soft_sphere_beside_a_dipole(case):
     d = case["d_over_a"] * 1e-3
     for axis, key in ((2, "F_z"), (0, "F_x")):
         position = jnp.zeros(3).at[axis].set(d)
-        body = soft.soft_body("sphere", 2e-3, cells=12, permeability=case["mu_r"])
+        body = soft.soft_body("sphere", radius=1e-3, cells=12, permeability=case["mu_r"])
         force = np.asarray(_force(body, position))
         assert abs(force[axis] / float(case[key]) - 1) < tolerance, (key, force)
         assert np.all(np.abs(np.delete(force, axis)) < 1e-9 * abs(force[axis]))
@@ -134,7 +136,7 @@ def test_induced_field_of_a_soft_sphere_beside_a_dipole(case):
     """The sphere's own field beyond it on the axis and beside it, against the series."""
     tolerance = 2e-2 if case["mu_r"] < 10 else 0.12
     position = jnp.array([0.0, 0.0, 2e-3])
-    body = soft.soft_body("sphere", 2e-3, cells=12, permeability=case["mu_r"])
+    body = soft.soft_body("sphere", radius=1e-3, cells=12, permeability=case["mu_r"])
     magnetization = solve(body, _sphere_beside_dipole(body, position))
     for key in ("B_beyond", "B_beside"):
         exact = np.array([float(v) for v in case[key]["B"]])
@@ -144,7 +146,7 @@ def test_induced_field_of_a_soft_sphere_beside_a_dipole(case):
 
 
 def test_the_system_is_symmetric_and_the_solution_linear_in_the_field():
-    body = soft.soft_body("cylinder", [1e-3, 3e-3], cells=6, permeability=50.0)
+    body = soft.soft_body("cylinder", radius=0.5e-3, height=3e-3, cells=6, permeability=50.0)
     matrix = np.asarray(soft.interaction(body))
     np.testing.assert_allclose(matrix, matrix.T, atol=1e-14)
     rng = np.random.default_rng(1)
@@ -155,7 +157,7 @@ def test_the_system_is_symmetric_and_the_solution_linear_in_the_field():
 def test_a_cube_turned_by_90_degrees_answers_the_same():
     """A cube's cells are the same along x and z: a field along x gives M along x with the
     value a field along z gives along z."""
-    body = soft.soft_body("cuboid", [1e-3] * 3, cells=5, permeability=300.0)
+    body = soft.soft_body("cuboid", dimension=[1e-3] * 3, cells=5, permeability=300.0)
     n = len(body.index)
     along_z = np.asarray(solve(body, jnp.broadcast_to(jnp.array([0.0, 0.0, 1e-3]), (n, 3))))
     along_x = np.asarray(solve(body, jnp.broadcast_to(jnp.array([1e-3, 0.0, 0.0]), (n, 3))))
@@ -165,14 +167,19 @@ def test_a_cube_turned_by_90_degrees_answers_the_same():
 @pytest.mark.parametrize(
     "call, match",
     [
-        (lambda: soft.soft_body("torus", 1e-3, cells=4, permeability=2.0), "shape"),
-        (lambda: soft.soft_body("cylinder", 1e-3, cells=4, permeability=2.0), "size"),
-        (lambda: soft.soft_body("sphere", -1e-3, cells=4, permeability=2.0), "size"),
-        (lambda: soft.soft_body("sphere", 1e-3, cells=0, permeability=2.0), "cells"),
-        (lambda: soft.soft_body("cuboid", [1e-3] * 3, cells=20, permeability=2.0), "cells"),
-        (lambda: soft.soft_body("sphere", 1e-3, cells=4, permeability=0.0), "permeability"),
+        (lambda: soft.soft_body("torus", radius=1e-3, cells=4, permeability=2.0), "shape"),
         (
-            lambda: soft.magnetization(soft.soft_body("sphere", 1e-3, cells=4, permeability=2.0), np.zeros((3, 3))),
+            lambda: soft.soft_body("cylinder", radius=1e-3, cells=4, permeability=2.0),
+            "cylinder takes radius= and height=",
+        ),
+        (lambda: soft.soft_body("sphere", radius=-0.5e-3, cells=4, permeability=2.0), "radius"),
+        (lambda: soft.soft_body("sphere", radius=0.5e-3, cells=0, permeability=2.0), "cells"),
+        (lambda: soft.soft_body("cuboid", dimension=[1e-3] * 3, cells=20, permeability=2.0), "cells"),
+        (lambda: soft.soft_body("sphere", radius=0.5e-3, cells=4, permeability=0.0), "permeability"),
+        (
+            lambda: soft.magnetization(
+                soft.soft_body("sphere", radius=0.5e-3, cells=4, permeability=2.0), np.zeros((3, 3))
+            ),
             "external",
         ),
     ],
@@ -180,3 +187,23 @@ def test_a_cube_turned_by_90_degrees_answers_the_same():
 def test_bad_input_is_a_clear_error(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_size_is_the_deprecated_way_to_size_a_body():
+    """``soft_body(shape, size)`` (diameters, as a spec writes them) still works and warns
+    naming the keywords; it builds the body the keywords build, whose cells hold the
+    body's own volume (4/3 pi r^3, pi r^2 h, the box's)."""
+    cases = [
+        ("sphere", 2e-3, {"radius": 1e-3}, 4 / 3 * np.pi * 1e-9),
+        ("cylinder", [1e-3, 3e-3], {"radius": 0.5e-3, "height": 3e-3}, np.pi * 0.25e-6 * 3e-3),
+        ("cuboid", [1e-3, 2e-3, 3e-3], {"dimension": [1e-3, 2e-3, 3e-3]}, 6e-9),
+    ]
+    for shape, size, keywords, volume in cases:
+        with pytest.warns(DeprecationWarning, match=" and ".join(f"{name}=" for name in keywords)):
+            old = soft.soft_body(shape, size, cells=6, permeability=2.0)
+        new = soft.soft_body(shape, **keywords, cells=6, permeability=2.0)
+        assert old.grid == new.grid and old.index == new.index
+        np.testing.assert_array_equal(old.cell, new.cell)
+        assert float(new.volume) == pytest.approx(volume, rel=1e-12), shape
+    with pytest.raises(ValueError, match=r"radius must be a scalar"):
+        soft.soft_body("sphere", radius=[1e-3, 2e-3], cells=4, permeability=2.0)

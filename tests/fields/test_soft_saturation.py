@@ -44,7 +44,7 @@ def test_a_saturating_sphere_in_a_uniform_field(mu_r, saturation, applied, toler
         return chi * h / np.sqrt(1.0 + (chi * h / saturation) ** 2)
 
     exact = brentq(lambda j: j - law(applied - j / 3.0), 0.0, min(saturation, 3.0 * applied) * (1 - 1e-12))
-    body = soft.soft_body("sphere", 2e-3, cells=8, permeability=mu_r, saturation=saturation)
+    body = soft.soft_body("sphere", radius=1e-3, cells=8, permeability=mu_r, saturation=saturation)
     polarization = MU0 * np.asarray(solve(body, _uniform(body, [0.0, 0.0, applied])))
     assert abs(polarization[:, 2].mean() / exact - 1) < tolerance
     assert np.all(np.linalg.norm(polarization, axis=-1) < saturation)
@@ -52,8 +52,8 @@ def test_a_saturating_sphere_in_a_uniform_field(mu_r, saturation, applied, toler
 
 
 def test_a_far_saturation_is_the_linear_body():
-    body = soft.soft_body("cylinder", [1e-3, 3e-3], cells=6, permeability=300.0)
-    saturating = soft.soft_body("cylinder", [1e-3, 3e-3], cells=6, permeability=300.0, saturation=1e6)
+    body = soft.soft_body("cylinder", radius=0.5e-3, height=3e-3, cells=6, permeability=300.0)
+    saturating = soft.soft_body("cylinder", radius=0.5e-3, height=3e-3, cells=6, permeability=300.0, saturation=1e6)
     field = _uniform(body, [1e-3, 0.0, 2e-3])
     np.testing.assert_allclose(solve(saturating, field), solve(body, field), rtol=1e-8)
     np.testing.assert_allclose(soft.coenergy(saturating, field), soft.coenergy(body, field), rtol=1e-8)
@@ -70,7 +70,7 @@ def test_the_coenergy_gradient_is_the_force_on_the_frozen_magnetisation():
     """Saturated Ni-Fe sphere beside a strong dipole: jax.grad of W' (through the
     nonlinear solve's implicit derivatives) against sum_i V (M_i . grad) B_ext(c_i) at the
     solved M, and against a central difference of W' itself."""
-    body = soft.soft_body("sphere", 2e-3, cells=6, permeability=1000.0, saturation=0.8)
+    body = soft.soft_body("sphere", radius=1e-3, cells=6, permeability=1000.0, saturation=0.8)
     position = jnp.array([0.4e-3, 0.0, 2e-3])
     polarization = MU0 * solve(body, _external(body, position))
     assert float(jnp.max(jnp.linalg.norm(polarization, axis=-1))) > 0.5 * 0.8  # well into the knee
@@ -92,7 +92,7 @@ def test_a_solve_that_cannot_converge_says_so(monkeypatch):
     """Deep saturation needs several steps; with a cap of one the solve must raise, not
     return the last iterate."""
     monkeypatch.setattr(soft, "SATURATION_MAX_STEPS", 1)
-    body = soft.soft_body("sphere", 2e-3, cells=4, permeability=300.0, saturation=2.2)
+    body = soft.soft_body("sphere", radius=1e-3, cells=4, permeability=300.0, saturation=2.2)
     with pytest.raises(
         Exception, match="saturation: the solve of the cells' magnetisation did not converge in 1 steps"
     ):
@@ -100,7 +100,7 @@ def test_a_solve_that_cannot_converge_says_so(monkeypatch):
 
 
 def _two_cubes(turn, saturation):
-    cube = soft.soft_body("cuboid", [1e-3] * 3, cells=3, permeability=300.0, saturation=saturation)
+    cube = soft.soft_body("cuboid", dimension=[1e-3] * 3, cells=3, permeability=300.0, saturation=saturation)
     centres = [jnp.array([-0.5e-3, 0.0, 0.0]), jnp.array([0.5e-3, 0.0, 0.0])]
     c, s = np.cos(turn), np.sin(turn)
     matrices = [jnp.eye(3), jnp.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])]  # v_body = R v_scene
@@ -117,7 +117,9 @@ def test_one_prism_is_two_cubes_side_by_side(turn, saturation):
     two 1 mm cubes of 3 x 3 x 3 cells (two bodies: pair-by-pair cross blocks), the second
     turned by 90 degrees about z (its cells land on the same places): same field outside."""
     moment = jnp.array([0.0, 0.0, 5.0]) if saturation else jnp.array([0.0, 0.0, 0.05])
-    prism = soft.soft_body("cuboid", [2e-3, 1e-3, 1e-3], cells=(6, 3, 3), permeability=300.0, saturation=saturation)
+    prism = soft.soft_body(
+        "cuboid", dimension=[2e-3, 1e-3, 1e-3], cells=(6, 3, 3), permeability=300.0, saturation=saturation
+    )
     whole = soft.magnetization(prism, dipole(prism.centres - SOURCE, moment))
     bodies, centres, matrices = _two_cubes(turn, saturation)
     externals = [dipole(c + b.centres @ m - SOURCE, moment) @ m.T for b, c, m in zip(bodies, centres, matrices)]
@@ -140,8 +142,8 @@ def test_two_far_spheres_magnetise_one_another_as_two_dipoles():
     within 1 % of the pair's (the dipole model leaves out the induced higher multipoles)."""
     radii, chis, distance, applied = (1e-3, 0.75e-3), (1.0, 2.0), 4e-3, 1e-2
     spheres = [
-        soft.soft_body("sphere", 2 * radii[0], cells=8, permeability=1.0 + chis[0]),
-        soft.soft_body("sphere", 2 * radii[1], cells=6, permeability=1.0 + chis[1], saturation=50.0),
+        soft.soft_body("sphere", radius=radii[0], cells=8, permeability=1.0 + chis[0]),
+        soft.soft_body("sphere", radius=radii[1], cells=6, permeability=1.0 + chis[1], saturation=50.0),
     ]
     centres = [jnp.zeros(3), jnp.array([0.0, 0.0, distance])]
     uniform = [_uniform(sphere, [0.0, 0.0, applied]) for sphere in spheres]
@@ -163,10 +165,10 @@ def test_derivatives_of_a_saturating_body_through_its_solve():
     position and to J_s (the implicit derivatives of the nonlinear solve), against central
     differences of re-solves."""
     point = jnp.array([0.0, 0.0, -1.6e-3])
-    grid = soft.soft_body("sphere", 2e-3, cells=4, permeability=1000.0).grid  # a traced J_s needs the grid given
+    grid = soft.soft_body("sphere", radius=1e-3, cells=4, permeability=1000.0).grid  # a traced J_s needs the grid given
 
     def own_field(position, saturation):
-        body = soft.soft_body("sphere", 2e-3, cells=grid, permeability=1000.0, saturation=saturation)
+        body = soft.soft_body("sphere", radius=1e-3, cells=grid, permeability=1000.0, saturation=saturation)
         return soft.field(body, soft.magnetization(body, _external(body, position)), point)
 
     position, saturation = jnp.array([0.3e-3, 0.0, 2e-3]), 0.8

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scene_helpers import example
 
-from magdesign.fields import cylinder_on_axis
+from magdesign.fields import cylinder_axial
 from magdesign.scene import Loads, loads_from_spec, outputs, scene_from_spec, simulate
 from magdesign.transducers import count_events
 
@@ -62,9 +62,9 @@ def test_dome_hall_outputs_match_closed_forms():
     closest = 7.4e-3 - out["compliance"] * force
     assert np.isclose(out["closest_gap"], closest, rtol=1e-12)
 
-    # the sensor is on the axis below the bottom face; Bz is even about the magnet's centre
+    # the sensor is on the axis a gap z below the bottom face; Bz is even about the magnet's centre
     def on_axis(z):
-        return cylinder_on_axis(z, radius=1.5e-3, height=1e-3, remanence=1.17)
+        return cylinder_axial(z + 0.5e-3, radius=1.5e-3, height=1e-3, polarization=1.17)
 
     assert np.isclose(out["field_rest"], on_axis(7.4e-3), rtol=1e-10)
     assert np.isclose(out["field_closest"], on_axis(closest), rtol=1e-10)

@@ -144,7 +144,7 @@ def test_parts_magnetise_one_another():
     """A second plate near the first changes the field by more than its own field alone
     does (the two magnetise one another); a second plate a metre away changes nothing."""
     points, rest = jnp.zeros((1, 3)), jnp.zeros(3)
-    near = {**PLATE, "position": ["0 mm", "0 mm", "-1.8 mm"], "cells": 6}
+    near = {**PLATE, "position": ["0 mm", "0 mm", "-2.1 mm"], "cells": 6}  # 0.1 mm below the first
     first = {**PLATE, "cells": 6}
     alone = [float(field(scene_from_spec(spec_with(part)), points, rest)[0, 2]) for part in (first, near)]
     bare = float(field(scene_from_spec(spec_with()), points, rest)[0, 2])
