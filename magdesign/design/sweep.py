@@ -17,7 +17,7 @@ from jaxtyping import ArrayLike
 from magdesign._numerics import DESIGN_ATOL, DESIGN_RTOL
 from magdesign.design.problem import Problem
 from magdesign.design.report import DesignSweep
-from magdesign.design.solve import _host, _start, settings_of, solve_batch
+from magdesign.design.solve import batch_inputs, settings_of, solve_batch
 from magdesign.scene import parameters
 
 
@@ -135,12 +135,9 @@ def sweep(
     ]
     problem = with_fixed(problem, [key for key in points if key not in rows])
     columns = rows + list(problem.fixed_names)
-    arrays = _host(problem).arrays
-    count = int(np.prod(shape))
-    thetas = np.repeat(arrays[4][None, :], count, axis=0)
+    y0, thetas = batch_inputs(problem, start, int(np.prod(shape)))
     for key, column in points.items():
         thetas[:, columns.index(key)] = column
-    y0 = np.broadcast_to(_start(problem, start, arrays), (count, len(problem.variables)))
     units = {t.output: t.unit for t in problem.targets}
     units.update({f"{lim.output}.{side}": lim.unit for lim in problem.limits for side in lim.sides})
     units.update(over_units or {})

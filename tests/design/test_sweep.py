@@ -20,6 +20,7 @@ from magdesign.design import Problem, Target, Variable, solve, sweep
 from magdesign.design.spec import default_spec, load_spec, problem_from_spec
 
 solver = importlib.import_module("magdesign.design.solve")
+batch = importlib.import_module("magdesign.design._sqp.batch")  # the module whose thresholds tests change
 
 mm, mT = 1e-3, 1e-3
 
@@ -166,10 +167,10 @@ def test_a_model_with_loops_is_swept_a_point_at_a_time_where_a_point_is_slow(mon
     continuation, from its own start.
     Either way the optimum and its derivatives are the closed form's."""
     assert solver._iterative(cubic_problem()) and not solver._iterative(product_problem())
-    monkeypatch.setattr(solver, "DESIGN_POINT_SECONDS", 0.0 if slow else np.inf)
+    monkeypatch.setattr(batch, "DESIGN_POINT_SECONDS", 0.0 if slow else np.inf)
     calls = []
-    one_by_one = solver._one_by_one
-    monkeypatch.setattr(solver, "_one_by_one", lambda *args: calls.append(1) or one_by_one(*args))
+    one_by_one = batch._one_by_one
+    monkeypatch.setattr(batch, "_one_by_one", lambda *args: calls.append(1) or one_by_one(*args))
     targets, factors = np.linspace(0.5, 2.0, 4), np.array([1.0, 3.0])
     result = sweep(cubic_problem(), {"x": targets, "a": factors})
     assert len(calls) == int(slow)
@@ -221,7 +222,7 @@ def test_a_point_that_fails_from_its_predicted_start_is_solved_again_from_its_ow
         return {"y": jnp.where((x > 2.2) & (x < 2.8), jnp.nan, root**2)}
 
     problem = Problem(model, [Variable("x", 0.1, 3.0, start=1.0)], targets=[Target("y", 1.0)])
-    monkeypatch.setattr(solver, "DESIGN_POINT_SECONDS", 0.0)
+    monkeypatch.setattr(batch, "DESIGN_POINT_SECONDS", 0.0)
     assert solve(problem, start={"x": 2.5}).status == "nonfinite"
     result = sweep(problem, {"y": [1.0, 4.0]})
     assert list(result.status) == ["successful", "successful"]
