@@ -39,6 +39,7 @@ from magdesign.design._sqp.program import _host, _run, _start, _unpack
 from magdesign.design._sqp.program import _structure as _structure
 from magdesign.design._sqp.program import batch_inputs as batch_inputs
 from magdesign.design._sqp.program import settings_of as settings_of
+from magdesign.design._sqp.sqp import SQP as SQP
 from magdesign.design._sqp.step import _no_slack_rows as _no_slack_rows
 from magdesign.design._sqp.step import subproblem as subproblem
 from magdesign.design._sqp.step import subproblem_box as subproblem_box
@@ -55,6 +56,7 @@ def solve(
     rtol: float = DESIGN_RTOL,
     atol: float = DESIGN_ATOL,
     max_steps: int = 100,
+    solver: SQP | None = None,
 ) -> DesignResult:
     """Solve a design problem; never raises for non-convergence (see ``status``).
 
@@ -66,6 +68,7 @@ def solve(
         atol: convergence tolerance on steps of the variables scaled to their bound width.
         max_steps: the most model evaluations of the search (line-search trials
             included), and the most Newton steps of the polish.
+        solver: the solver's thresholds (:class:`SQP`); None: its defaults.
 
     Returns:
         A :class:`DesignResult`: status (a :class:`DesignStatus` name: "successful",
@@ -77,7 +80,7 @@ def solve(
         than "successful", an optimum that the polish did not refine, or a model whose
         derivative there is infinite).
     """
-    settings, host = settings_of(rtol, atol, max_steps), _host(problem)
+    settings, host = settings_of(rtol, atol, max_steps, solver), _host(problem)
     y0, theta = (host.y0 if not start else _start(problem, start, host.arrays)), host.theta
     began = time.perf_counter()
     packed = _run(problem, y0, theta, settings)
@@ -93,15 +96,17 @@ def multistart(
     rtol: float = DESIGN_RTOL,
     atol: float = DESIGN_ATOL,
     max_steps: int = 100,
+    solver: SQP | None = None,
 ) -> DesignSweep:
     """Solve ``problem`` from a batch of starts {variable: (batch,) values (SI)} at once.
 
-    Variables missing from ``starts`` start at their own start. Returns a
+    Variables missing from ``starts`` start at their own start; rtol, atol, max_steps and
+    ``solver`` as in :func:`solve`. Returns a
     :class:`DesignSweep` with one solution per start.
     """
     batch = {np.shape(value) for value in starts.values()}
     if len(batch) != 1 or len(next(iter(batch))) != 1:
         raise ValueError(f"starts: give one (batch,) array per variable, got shapes {sorted(batch)}")
     y0, thetas = batch_inputs(problem, starts, next(iter(batch))[0])
-    solution, seconds = solve_batch(problem, y0, thetas, settings_of(rtol, atol, max_steps))
+    solution, seconds = solve_batch(problem, y0, thetas, settings_of(rtol, atol, max_steps, solver))
     return DesignSweep.from_core(problem, solution, thetas, seconds)

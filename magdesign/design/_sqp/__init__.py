@@ -2,7 +2,7 @@
 
 The search works on variables scaled to their bound width, y = (x - lower) / scale in
 [0, y_max], the objective scaled to a unit gradient at the start (or, next to a
-stationary point, to a gradient of DESIGN_GRADIENT_FLOOR times its Hessian) and each constraint row
+stationary point, to a gradient of ``SQP.gradient_floor`` times its Hessian) and each constraint row
 to its target or limit. It has two stages:
 
 1. sequential quadratic programming (ours): at each accepted point the quadratic model
@@ -31,7 +31,7 @@ to its target or limit. It has two stages:
    "successful" then also needs the reduced Hessian of the Lagrangian on the null space
    of the active constraints to be positive semi-definite, and a point that fails it is
    left along its direction of negative curvature, bent along the active constraints (at
-   most DESIGN_ESCAPES times, then "not_a_minimum"). A stationary point whose least
+   most ``SQP.escapes`` times, then "not_a_minimum"). A stationary point whose least
    curvature is too small to tell (x^3 at 0), or which the steps reached only linearly
    (a stationary start too, which no steps reached), is probed on both sides of a
    direction that combines all its flat ones, then of the steps' approach

@@ -15,12 +15,6 @@ from jax.experimental import multihost_utils
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 from tqdm import tqdm
 
-from magdesign._numerics import (
-    DESIGN_BATCH_MEMORY,
-    DESIGN_CHAIN,
-    DESIGN_CHUNK,
-    DESIGN_POINT_SECONDS,
-)
 from magdesign._tracing import errors_as_nan, gc_paused, has_loops
 from magdesign.design._sqp.jet import _values
 from magdesign.design._sqp.program import _compiled, _host, _structure, _unpack
@@ -34,9 +28,9 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None, con
 
     On a CPU, a problem whose model runs loops of its own (an iterative solve, such as an
     axisymmetric dome's path: :func:`_iterative`) and whose first point takes longer than
-    DESIGN_POINT_SECONDS to solve is solved a point per call of the program that
+    ``settings.sqp.point_seconds`` to solve is solved a point per call of the program that
     :func:`solve` compiles, on parallel threads (:func:`_one_by_one`). Any other goes in
-    chunks of at most ``chunk`` points (default DESIGN_CHUNK), so that memory stays
+    chunks of at most ``chunk`` points (default ``settings.sqp.chunk``), so that memory stays
     bounded, each chunk vmapped and split over every local device (``jax.sharding``;
     :func:`_in_chunks`). Under ``jax.distributed`` (more than one process) each process
     solves its share of the points and every process gets the whole result.
@@ -51,6 +45,7 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None, con
     mine = slice(index * share, min((index + 1) * share, count))
     y0, thetas = np.asarray(y0, np.float64)[mine], np.asarray(thetas, np.float64)[mine]
     key, arrays = _structure(problem, settings)
+    sqp = settings.sqp
     bar = (
         tqdm(
             total=share,
@@ -69,10 +64,10 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None, con
             program = _compiled(key, False).lower(arrays, y0[0], thetas[0]).compile()
         first_began = time.perf_counter()
         first = np.asarray(program(arrays, y0[0], thetas[0]))
-        if time.perf_counter() - first_began > DESIGN_POINT_SECONDS:
-            packed = _one_by_one(_host(problem), program, arrays, first, y0, thetas, bar, continuation)
+        if time.perf_counter() - first_began > sqp.point_seconds:
+            packed = _one_by_one(_host(problem), program, arrays, first, y0, thetas, bar, continuation, sqp)
     if packed is None:
-        packed = _in_chunks(key, arrays, y0, thetas, share, chunk, bar)
+        packed = _in_chunks(key, arrays, y0, thetas, share, chunk or sqp.chunk, bar, sqp.batch_memory)
     if bar is not None:
         bar.close()
     if processes > 1:
@@ -96,11 +91,11 @@ def usable_cores():
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
+def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation, sqp):
     """The packed solutions (points, width) of the points (y0, thetas), ``first`` that of
     the first point, solved a point per call of ``program`` (:func:`solve`'s, compiled)
     on a thread per usable core, fewer where their working memory together would pass
-    DESIGN_BATCH_MEMORY; ``host`` the problem's :class:`_Host`.
+    sqp.batch_memory; ``host`` the problem's :class:`_Host`.
 
     Vmapped lanes run in lock-step: every loop of a batched program turns until its
     slowest lane is done, at each level of the nested loops of a dome's path solve. A
@@ -109,7 +104,7 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
     machine, 2026-11-28; scratch scripts timing the solver's parts). A call releases the
     interpreter while it runs, so the threads run their points side by side.
 
-    With ``continuation`` the points go in runs of DESIGN_CHAIN, one run per thread at a
+    With ``continuation`` the points go in runs of sqp.chain, one run per thread at a
     time (the progress bar moves a run at a time): the first of a run starts from its
     y0, each next from the optimum that the point before predicts to first order with
     its implicit derivatives (where that point is successful and has them), and where a
@@ -118,7 +113,7 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
     on the threads. Without, every point starts from its y0."""
     memory = program.memory_analysis()
     per_point = None if memory is None else memory.temp_size_in_bytes
-    workers = usable_cores() if not per_point else min(usable_cores(), max(1, DESIGN_BATCH_MEMORY // per_point))
+    workers = usable_cores() if not per_point else min(usable_cores(), max(1, sqp.batch_memory // per_point))
     lower, upper, scale = host.arrays[:3]
     n, p = y0.shape[1], thetas.shape[1]
     x_at, derivatives_at, status_at = (slice(*host.layout[name]) for name in ("x", "derivatives", "status"))
@@ -147,7 +142,7 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
             packed.append(result if successful(result) else solved(i, y0[i]))
         return packed
 
-    length = DESIGN_CHAIN if continuation else 1
+    length = sqp.chain if continuation else 1
     heads = range(0, len(y0), length)
     packed = []
     with ThreadPoolExecutor(max(1, min(workers, len(heads)))) as pool:
@@ -158,20 +153,19 @@ def _one_by_one(host, program, arrays, first, y0, thetas, bar, continuation):
     return np.stack(packed)
 
 
-def _in_chunks(key, arrays, y0, thetas, share, chunk, bar):
+def _in_chunks(key, arrays, y0, thetas, share, chunk, bar, batch_memory):
     """The packed solutions (points, width) of the points (y0, thetas) in vmapped chunks,
     each split over every local device (see :func:`solve_batch`)."""
     devices = jax.local_devices()
     # equal chunks, each a multiple of the device count: one compiled shape, little padding
     # (a batch that fits one chunk is padded to a power of two, so that sweeps of nearby
     # sizes share one compiled program)
-    limit = chunk or DESIGN_CHUNK
-    size = min(1 << max(share - 1, 0).bit_length(), limit) if share <= limit else -(-share // -(-share // limit))
+    size = min(1 << max(share - 1, 0).bit_length(), chunk) if share <= chunk else -(-share // -(-share // chunk))
     size = -(-size // len(devices)) * len(devices)
     sharding = (
         NamedSharding(Mesh(np.array(devices), ("points",)), PartitionSpec("points")) if len(devices) > 1 else None
     )
-    run, size = _batch_program(key, arrays, size, y0.shape[1], thetas.shape[1], sharding)
+    run, size = _batch_program(key, arrays, size, y0.shape[1], thetas.shape[1], sharding, batch_memory)
     packed = []
     for start in range(0, max(share, 1), size):
         part = [_padded(a[start : start + size], size) for a in (y0, thetas)]
@@ -186,9 +180,9 @@ def _in_chunks(key, arrays, y0, thetas, share, chunk, bar):
 _PROGRAMS = {}  # (structure, chunk size, columns, devices) -> compiled batch program
 
 
-def _batch_program(key, arrays, size, n, p, sharding):
+def _batch_program(key, arrays, size, n, p, sharding, batch_memory):
     """(compiled program, chunk size) for chunks of ``size`` points, or of fewer where its
-    working memory would pass DESIGN_BATCH_MEMORY (an axisymmetric dome's solve takes
+    working memory would pass ``batch_memory`` (bytes; an axisymmetric dome's solve takes
     about 100 MB per point): read from XLA's memory analysis of the compiled program."""
     devices = 1 if sharding is None else sharding.mesh.size
     while True:
@@ -202,9 +196,9 @@ def _batch_program(key, arrays, size, n, p, sharding):
         program = _PROGRAMS[entry]
         memory = program.memory_analysis()
         need = None if memory is None else memory.temp_size_in_bytes * devices
-        if need is None or need <= DESIGN_BATCH_MEMORY or size <= devices:
+        if need is None or need <= batch_memory or size <= devices:
             return program, size
-        size = max(devices, int(size * DESIGN_BATCH_MEMORY / need) // devices * devices)
+        size = max(devices, int(size * batch_memory / need) // devices * devices)
 
 
 @contextlib.contextmanager

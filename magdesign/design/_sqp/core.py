@@ -7,10 +7,6 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
-from magdesign._numerics import (
-    DESIGN_ON_CONSTRAINT,
-    DESIGN_POLISH_REACH,
-)
 from magdesign.design._sqp.jet import Settings, _lagrangian_hessian, problem_arrays
 from magdesign.design._sqp.loop import CONVERGED, NONFINITE_START, NOT_MINIMUM, _search_and_polish
 from magdesign.design._sqp.polish import _equations, _implicit_derivatives, _solvable
@@ -41,7 +37,7 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     n, n_targets = len(problem.variables), len(problem.targets)
     lower, upper, scale, _, _ = problem_arrays(problem)
     y_max = (upper - lower) / scale
-    tol = settings.rtol
+    tol, sqp = settings.rtol, settings.sqp
 
     loop = _search_and_polish(problem, jax.lax.stop_gradient(y0), theta, settings, y_max)
     search, polish = loop.search, loop.polish
@@ -58,7 +54,7 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     usable = usable & jnp.all(jnp.stack([jnp.all(jnp.isfinite(leaf)) for leaf in jax.tree.leaves(polished)]))
     if theta.shape[0]:
         dz = _implicit_derivatives(equations, z, polished, theta, usable)
-        dy = jnp.where(_solvable(equations, z, polished, theta, dz), dz[:n], jnp.nan)
+        dy = jnp.where(_solvable(equations, z, polished, theta, dz, sqp=sqp), dz[:n], jnp.nan)
     else:
         dy = jnp.zeros((n, 0))
     outputs, c = polished.outputs, polished.v[1:]
@@ -73,7 +69,7 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     # (to sqrt(rtol)): on 1e10 (x + y - 1)^2 + (x - y - 0.2)^2 the search, whose objective
     # (scaled to its gradient at the start) fell below rounding, stopped 0.04 from the
     # minimum, and the polish's exact step there, 0.009 of a box width, was dropped.
-    near = jnp.max(jnp.abs(y - y_start)) <= DESIGN_POLISH_REACH
+    near = jnp.max(jnp.abs(y - y_start)) <= sqp.polish_reach
     if problem.objective is not None:
         pull = search.weight * polished.J[0] + polished.J[1:].T @ multipliers  # a fixed variable's bound's multiplier
         signed = jnp.all(jnp.where(equations.equations[n_targets:], multipliers[n_targets:], 0.0) >= -jnp.sqrt(tol))
@@ -82,7 +78,7 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
         near = near | ((residual <= tol) & (polished.v[0] <= search.jet.v[0]) & signed)
     kept = (
         usable
-        & jnp.all((y >= -DESIGN_ON_CONSTRAINT) & (y <= y_max + DESIGN_ON_CONSTRAINT))
+        & jnp.all((y >= -sqp.on_constraint) & (y <= y_max + sqp.on_constraint))
         & near
         & (~jnp.any(_broken(c, n_targets, tol)) | jnp.any(_broken(search.jet.v[1:], n_targets, tol)))
     )

@@ -8,15 +8,19 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from magdesign._tracing import traced_once
+from magdesign.design._sqp.sqp import SQP
 from magdesign.design.problem import Problem
 
 
 class Settings(eqx.Module):
-    """Solver settings: tolerances on scaled quantities and the steps allowed per stage."""
+    """Solver settings: tolerances on scaled quantities (traced: a program serves every
+    tolerance), the steps allowed per stage, and the solver's thresholds (:class:`SQP`,
+    static: part of the compiled program)."""
 
     rtol: Float[Array, ""]
     atol: Float[Array, ""]
     max_steps: int = eqx.field(static=True)
+    sqp: SQP = eqx.field(static=True, default_factory=SQP)
 
 
 def problem_arrays(problem: Problem, xp=jnp):

@@ -9,11 +9,6 @@ import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
 from magdesign._numerics import (
-    DESIGN_CURVATURE_TOL,
-    DESIGN_ESCAPES,
-    DESIGN_FLAT_CURVATURE,
-    DESIGN_GRADIENT_FLOOR,
-    DESIGN_START_NUDGE,
     safe_div,
 )
 from magdesign.design._qp import where_needed
@@ -24,42 +19,11 @@ from magdesign.design._sqp.polish import _equations, _newton, _newton_step, _Pol
 from magdesign.design._sqp.step import _held_rows, _no_slack_rows, _settled_step, _Step, _step
 from magdesign.design.problem import Problem
 
-# Armijo's sufficient-decrease fraction of the line search, and the shortest step it tries;
-# a decrease of the merit counts only above _ROUNDING times (1 + |merit|).
-_ARMIJO = 1e-4
-_SHORTEST_STEP = 1e-12
-# The step's radius (an inf-norm trust region on the subproblem, scaled variables): none
-# until the line search first shortens a step, then the length it shortened the last one
-# to, doubled after each whole step that reaches it, never below _RADIUS_FLOOR times the
-# step tolerance.
-_RADIUS_GROWTH, _RADIUS_FLOOR = 2.0, 10.0
-# Without an objective, the radius grows only after a step that gained more than this
-# fraction of the merit's decrease that its linearisation promised (see accept).
-_GROWTH_GAIN = 0.75
-# The line search compares a step's merit with the largest of the last _HISTORY accepted
-# points' (nonmonotone, Grippo, Lampariello and Lucidi 1986).
-_HISTORY = 8
-# The merit's penalty starts at, and never falls below, this (the objective is scaled to a
-# unit gradient at the start, so its multipliers are O(1)).
-_PENALTY_FLOOR = 1.0
-_NO_POINT = np.stack([np.full(_HISTORY, -np.inf), np.zeros(_HISTORY)], axis=1)  # an empty history
-_ROUNDING = 1e-13
-
-
 # Phases of the search. Each iteration tries one point and evaluates the model's jet there
 # once; the search ends at the first phase from CONVERGED on (and the loop goes on with
 # the polish).
 START, SEARCH, ESCAPE, PROBE, CONVERGED, STALLED, NOT_MINIMUM, NONFINITE_START = range(8)
 
-# The probe of a flat stationary point tries the arc along its flat directions
-# (:func:`_least_curvature`) at these fractions of a box width, each on both sides, before
-# accepting it.
-_PROBE_FIRST, _PROBE_SHRINK, _PROBE_LAST = 1.0, 1.0 / 8.0, 1.0 / 512.0
-# Steps that shrink by less than this factor from one point to the next converge linearly
-# (Newton's on x^3 by 1/2, on x^4 by 2/3). At 0.1, hs056's last steps (by 0.13, superlinear
-# with the Hessian at the last point's multipliers) counted as linear, and the probe of its
-# optimum took a point a box width away, lower in the merit but grossly infeasible.
-_LINEAR_RATE = 0.25
 
 
 class _State(eqx.Module):
@@ -72,10 +36,10 @@ class _State(eqx.Module):
     first try where ``bend_first``, the last step having been bent); ``alpha`` the fraction
     tried next; the line search asks for a merit below the largest in the ``history``
     + ARMIJO (alpha slope + alpha^2 curvature), ``history`` holding the weighted objective
-    and the violation of the last _HISTORY accepted points of the search (the first this
+    and the violation of the last sqp.history accepted points of the search (the first this
     one's), priced at the present penalty (along a direction that is no descent,
     ``merit`` alone). ``radius`` bounds the subproblem's step
-    (:data:`_RADIUS_GROWTH`). ``nu`` is the merit's penalty, ``weight`` the objective's
+    (``SQP.radius_growth``). ``nu`` is the merit's penalty, ``weight`` the objective's
     scale. ``second`` (0 where none) is the direction a probe tries once ``direction``
     has failed, with its ``second_correction``."""
 
@@ -112,6 +76,8 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
     n, n_targets = y0.shape[0], len(problem.targets)
     m = max(n_targets + len(problem.limit_rows), 1)  # with _evaluate's row that never binds
     xtol = jnp.sqrt(settings.atol)
+    sqp = settings.sqp
+    no_point = np.stack([np.full(sqp.history, -np.inf), np.zeros(sqp.history)], axis=1)  # an empty history
 
     def bend_operands(state):
         """:func:`_bend`'s operands for the step at the accepted point: its active rows."""
@@ -135,47 +101,47 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             # (Overshooting alone, downhill too, halved the radius along Powell's badly
             # scaled system, whose nearly met rows change sign from step to step: 60
             # steps where 19 did.) The radius grows only after a step that gained at least
-            # _GROWTH_GAIN of the merit's decrease that its linearisation promised (on x^2's
+            # sqp.growth_gain of the merit's decrease that its linearisation promised (on x^2's
             # way to 0 a step of half the distance gains 3/4 of it).
-            rising = jax.grad(_violation)(jet.v[1:], n_targets) @ jet.J[1:]  # the violation's gradient in y
-            gained = state.merit - _merit(jet, state.weight, state.nu, n_targets)
+            rising = jax.grad(_violation)(jet.v[1:], n_targets, sqp=sqp) @ jet.J[1:]  # the violation's gradient in y
+            gained = state.merit - _merit(jet, state.weight, state.nu, n_targets, sqp=sqp)
             overshot = searched & (gained < 0.0) & (jnp.dot(rising, state.direction) > 0.0)
-            stuck = overshot & (state.alpha * taken <= _RADIUS_FLOOR * xtol)
-            reached = reached & ~overshot & (gained >= -_GROWTH_GAIN * state.alpha * state.slope)
+            stuck = overshot & (state.alpha * taken <= sqp.radius_floor * xtol)
+            reached = reached & ~overshot & (gained >= -sqp.growth_gain * state.alpha * state.slope)
             radius = jnp.where(overshot, 0.5 * state.alpha * taken, radius)
-        radius = jnp.maximum(jnp.where(reached, _RADIUS_GROWTH * state.radius, radius), _RADIUS_FLOOR * xtol)
+        radius = jnp.maximum(jnp.where(reached, sqp.radius_growth * state.radius, radius), sqp.radius_floor * xtol)
         if problem.objective is not None:
             step, bound_multipliers = _settled_step(
-                jet, y, y_max, state.step, state.bound_multipliers, state.weight, n_targets, radius, xtol
+                jet, y, y_max, state.step, state.bound_multipliers, state.weight, n_targets, radius, xtol, sqp=sqp
             )
         else:  # the Hessians are not used (see _jet): one solve
             step, bound_multipliers, _ = _step(
-                jet, y, y_max, state.step, state.bound_multipliers, state.weight, n_targets, False, radius
+                jet, y, y_max, state.step, state.bound_multipliers, state.weight, n_targets, False, radius, sqp=sqp
             )
-        # The penalty stays at least max(twice the multipliers, _PENALTY_FLOOR) and falls
+        # The penalty stays at least max(twice the multipliers, sqp.penalty_floor) and falls
         # halfway towards that at each point (Powell's update, with one penalty for all
         # rows, where SLSQP keeps one per row, and a floor): after an elastic step
-        # (multipliers at DESIGN_ELASTIC) a penalty kept at 2e6 while the multipliers fell
+        # (multipliers at sqp.elastic) a penalty kept at 2e6 while the multipliers fell
         # to 2e-3 made the merit of hs069's curved targets' second-order violation (1e-9)
         # outweigh the objective's decrease: steps of 1e-3 to and fro, "max_steps_reached".
         # Without the floor the penalty fell with the vanishing multipliers of hs047's
         # degenerate minimum, and its probe took an infeasible point.
-        need = jnp.maximum(2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0), _PENALTY_FLOOR)
+        need = jnp.maximum(2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0), sqp.penalty_floor)
         nu = jnp.maximum(need, 0.5 * (state.nu + need))
-        parts = _merit_parts(jet, state.weight, n_targets)
+        parts = _merit_parts(jet, state.weight, n_targets, sqp=sqp)
         merit = _priced(parts, nu)
         gradient = state.weight * jet.J[0]
         # The merit's directional derivative along the step; never above 0, so that a
         # step which is no descent direction (an inexact subproblem) is taken only downhill.
-        slope = jnp.dot(gradient, step.d) - nu * (_violation(jet.v[1:], n_targets) - step.linear_violation)
+        slope = jnp.dot(gradient, step.d) - nu * (_violation(jet.v[1:], n_targets, sqp=sqp) - step.linear_violation)
         slope = jnp.minimum(slope, 0.0)
         stationary = (jnp.max(jnp.abs(step.d)) <= xtol) | stuck
-        linear = jnp.max(jnp.abs(step.d)) >= _LINEAR_RATE * jnp.max(jnp.abs(state.step.d))
+        linear = jnp.max(jnp.abs(step.d)) >= sqp.linear_rate * jnp.max(jnp.abs(state.step.d))
         approach = jnp.where(linear, step.d, 0.0)
         # Only a stationary point's curvature is read: its SVD and eigenvalues run only there.
         curvature, v, w, u, wu = where_needed(
             stationary & (problem.objective is not None),
-            lambda operands: _least_curvature(*operands, n_targets),
+            lambda operands: _least_curvature(*operands, n_targets, sqp=sqp),
             (jet, step, bound_multipliers, state.weight, approach),
             (jnp.ones(()), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n), jnp.zeros(n)),
         )
@@ -189,7 +155,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             point was called "not_a_minimum"."""
             v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
             box = jnp.stack([_room(y, v, y_max), _room(y, -v, y_max)])
-            held = jnp.minimum(box, jnp.stack([_limits_room(jet, v, n_targets), _limits_room(jet, -v, n_targets)]))
+            held = jnp.minimum(box, jnp.stack([_limits_room(jet, v, n_targets, sqp=sqp), _limits_room(jet, -v, n_targets, sqp=sqp)]))
             wider = (held[1] > held[0]) | ((held[1] == held[0]) & (box[1] > box[0]))
             flip = (jnp.dot(gradient, v) == 0.0) & wider
             return jnp.where(flip, -v, v), jnp.where(flip, box[1], box[0]), jnp.max(held)
@@ -198,10 +164,10 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         # Where weakly active rows block v both ways, the faces of the cone they leave give
         # the least curvature of a direction that leaves the point, signed to leave
         # (_saddle_on_faces); where none leaves, the point is a minimum on that cone.
-        blocked = stationary & (curvature < -DESIGN_CURVATURE_TOL) & (most <= 0.0)
+        blocked = stationary & (curvature < -sqp.curvature_tol) & (most <= 0.0)
         decided, found, face_curvature, face_v, face_w = where_needed(
             blocked,
-            lambda operands: _saddle_on_faces(*operands, n_targets),
+            lambda operands: _saddle_on_faces(*operands, n_targets, sqp=sqp),
             (jet, step, bound_multipliers, state.weight, y, y_max),
             (jnp.asarray(False), jnp.asarray(False), curvature, v, w),
         )
@@ -209,16 +175,16 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         curvature = jnp.where(on_face, face_curvature, jnp.where(blocked & decided, 1.0, curvature))
         v, room = jnp.where(on_face, face_v, v), jnp.where(on_face, _room(y, face_v, y_max), room)
         w = jnp.where(on_face, face_w, w)
-        saddle = stationary & (curvature < -DESIGN_CURVATURE_TOL)
-        escape = saddle & (state.escapes < DESIGN_ESCAPES) & (room > 0.0)
+        saddle = stationary & (curvature < -sqp.curvature_tol)
+        escape = saddle & (state.escapes < sqp.escapes) & (room > 0.0)
         # A stationary point whose curvature is too small to tell a minimum (x^3 at 0, a
         # ridge of -x^4), or which the steps approached only linearly (as they approach a
         # degenerate point, where at a minimum with curvature Newton's steps shrink
         # quadratically), is probed on both sides before it is accepted (a stationary start
         # too: no steps tell how it was approached). Without an objective there is no
         # minimum to confirm, nor a direction to probe (every probe tried the point itself).
-        flat = (curvature <= DESIGN_FLAT_CURVATURE) | linear
-        probe = stationary & ~saddle & flat & (state.escapes < DESIGN_ESCAPES) & (problem.objective is not None)
+        flat = (curvature <= sqp.flat_curvature) | linear
+        probe = stationary & ~saddle & flat & (state.escapes < sqp.escapes) & (problem.objective is not None)
         phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)
         return eqx.tree_at(
             lambda s: (
@@ -251,7 +217,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
                 bound_multipliers,
                 jnp.select([escape, probe], [room * v, v], step.d),
                 jnp.select([escape, probe], [room**2 * w, w], jnp.zeros(n)),
-                jnp.where(probe, _PROBE_FIRST, 1.0),
+                jnp.where(probe, sqp.probe_first, 1.0),
                 merit,
                 jnp.where(escape, jnp.dot(gradient, v), slope),
                 jnp.where(escape, 0.5 * curvature, 0.0),
@@ -261,7 +227,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
                 radius,
                 # a larger penalty would make the old points' merits lenient; a search restarts
                 # its history then, and after an escape or a probe
-                jnp.where((nu > state.nu) | ~searched, _NO_POINT, jnp.roll(state.history, 1, axis=0)).at[0].set(parts),
+                jnp.where((nu > state.nu) | ~searched, no_point, jnp.roll(state.history, 1, axis=0)).at[0].set(parts),
                 searched & state.bent,
                 jnp.where(probe, u, 0.0),
                 jnp.where(probe, wu, 0.0),
@@ -276,7 +242,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         bend_now = ~polishing & (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & state.bend_first
         if problem.objective is not None:
             correction = where_needed(
-                bend_now, lambda operands: _bend(*operands), bend_operands(state), state.correction
+                bend_now, lambda operands: _bend(*operands, sqp=sqp), bend_operands(state), state.correction
             )
             state = eqx.tree_at(
                 lambda s: (s.bent, s.correction, s.straight),
@@ -300,13 +266,13 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         # START: a start where the model is flat in every direction (the centre of a
         # symmetric design) offers no step at all: move it once a little into the box, by
         # a different amount per variable; otherwise scale the objective and accept it
-        # (to a unit gradient, counted no smaller than DESIGN_GRADIENT_FLOOR times the
+        # (to a unit gradient, counted no smaller than sqp.gradient_floor times the
         # Hessian: next to a stationary point 1 / |gradient| left the polish only rounding).
         flat = start & ~state.nudged & jnp.all(jet.J == 0.0)
         inward = jnp.where(trial > 0.5 * y_max, -1.0, 1.0)
-        nudge = inward * DESIGN_START_NUDGE * y_max * (1.0 + jnp.arange(n)) / n
+        nudge = inward * sqp.start_nudge * y_max * (1.0 + jnp.arange(n)) / n
         nudged = eqx.tree_at(lambda s: (s.y, s.nudged), state, (trial + nudge, jnp.asarray(True)))
-        size = jnp.maximum(jnp.linalg.norm(jet.J[0]), DESIGN_GRADIENT_FLOOR * jnp.linalg.norm(jet.H[0]))
+        size = jnp.maximum(jnp.linalg.norm(jet.J[0]), sqp.gradient_floor * jnp.linalg.norm(jet.H[0]))
         scaled = eqx.tree_at(lambda s: s.weight, state, safe_div(1.0, size, at_zero=1.0))
         accepted = accept(_pick(start, scaled, state), trial, jet)
         not_started = eqx.tree_at(lambda s: s.phase, state, jnp.asarray(NONFINITE_START))
@@ -315,13 +281,13 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         # lower by more than rounding, else the other side, then a shorter arc, and the
         # point stands (CONVERGED) after the shortest.
         probing = state.phase == PROBE
-        merit = _merit(jet, state.weight, state.nu, n_targets)
+        merit = _merit(jet, state.weight, state.nu, n_targets, sqp=sqp)
         # nonmonotone only in the search and along a descent direction (the history's
         # first entry is this point's merit)
         merits = _priced(state.history, state.nu)
         reference = jnp.where((state.phase == SEARCH) & (state.slope < 0.0), jnp.max(merits), state.merit)
-        wanted = reference + _ARMIJO * (alpha * state.slope + alpha**2 * state.curvature)
-        wanted = jnp.where(probing, state.merit - _ROUNDING * (1.0 + jnp.abs(state.merit)), wanted)
+        wanted = reference + sqp.armijo * (alpha * state.slope + alpha**2 * state.curvature)
+        wanted = jnp.where(probing, state.merit - sqp.rounding * (1.0 + jnp.abs(state.merit)), wanted)
         good = finite & (merit <= wanted)
         # A whole step that failed straight is tried once more bent (the Maratos effect: a
         # step along a curved constraint that the merit rejects for its second-order
@@ -332,9 +298,9 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         # accepted point its pseudo-inverse would cost a batched sweep 1.7 times its time.
         # Without an objective there are no Hessians (see _jet), and the steps go straight.
         may_bend = (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & ~good & (problem.objective is not None)
-        correction = where_needed(may_bend, lambda operands: _bend(*operands), bend_operands(state), state.correction)
+        correction = where_needed(may_bend, lambda operands: _bend(*operands, sqp=sqp), bend_operands(state), state.correction)
         bend = may_bend & jnp.any(correction != 0.0)
-        next_alpha = jnp.where(probing, jnp.where(alpha > 0.0, -alpha, -alpha * _PROBE_SHRINK), 0.5 * alpha)
+        next_alpha = jnp.where(probing, jnp.where(alpha > 0.0, -alpha, -alpha * sqp.probe_shrink), 0.5 * alpha)
         next_alpha = jnp.where(bend, alpha, next_alpha)
         keep = state.bent & ((alpha < 1.0) | (merit < state.straight))
         bent = jnp.where(state.phase == SEARCH, bend | keep, state.bent)
@@ -344,12 +310,12 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         )
         given_up = jnp.select([state.phase == ESCAPE, probing], [NOT_MINIMUM, CONVERGED], STALLED)
         failed = eqx.tree_at(lambda s: s.phase, shorter, given_up)
-        too_short = jnp.abs(next_alpha) < jnp.where(probing, _PROBE_LAST, _SHORTEST_STEP)
+        too_short = jnp.abs(next_alpha) < jnp.where(probing, sqp.probe_last, sqp.shortest_step)
         # A probe that found nothing along its direction tries its second, if it has one.
         turned = eqx.tree_at(
             lambda s: (s.direction, s.correction, s.alpha, s.second, s.second_correction),
             shorter,
-            (state.second, state.second_correction, jnp.asarray(_PROBE_FIRST), jnp.zeros(n), jnp.zeros(n)),
+            (state.second, state.second_correction, jnp.asarray(sqp.probe_first), jnp.zeros(n), jnp.zeros(n)),
         )
         failed = _pick(probing & jnp.any(state.second != 0.0), turned, failed)
         searched = _pick(good, accepted, _pick(too_short, failed, shorter))
@@ -377,7 +343,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         merit=jnp.zeros(()),
         slope=jnp.zeros(()),
         curvature=jnp.zeros(()),
-        nu=jnp.asarray(_PENALTY_FLOOR),
+        nu=jnp.asarray(sqp.penalty_floor),
         bent=jnp.asarray(False),
         straight=jnp.asarray(0.0),
         weight=jnp.asarray(1.0),
@@ -385,7 +351,7 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         nudged=jnp.asarray(False),
         steps=jnp.asarray(0),
         radius=jnp.asarray(jnp.inf),
-        history=_NO_POINT,
+        history=no_point,
         bend_first=jnp.asarray(False),
         second=jnp.zeros(n),
         second_correction=jnp.zeros(n),

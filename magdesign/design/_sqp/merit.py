@@ -4,28 +4,24 @@ violation of the scaled constraint rows."""
 
 import jax.numpy as jnp
 
-# Scaled constraint rows within this of their target or limit count as met in the merit
-# function: far below the tolerance on them (DESIGN_RTOL), above their rounding.
-_MET_ROW = 1e-13
 
-
-def _violation(c, n_targets):
+def _violation(c, n_targets, *, sqp):
     """l1 violation: |target rows| + positive parts of the limit rows, each less
-    _MET_ROW: a row met to rounding counts as met, so that its rounding noise cannot
+    sqp.met_row: a row met to rounding counts as met, so that its rounding noise cannot
     drown the objective's decrease in the merit function near a solution."""
     targets, limits = jnp.abs(c[:n_targets]), c[n_targets:]
-    return jnp.sum(jnp.maximum(targets - _MET_ROW, 0.0)) + jnp.sum(jnp.maximum(limits - _MET_ROW, 0.0))
+    return jnp.sum(jnp.maximum(targets - sqp.met_row, 0.0)) + jnp.sum(jnp.maximum(limits - sqp.met_row, 0.0))
 
 
-def _merit_parts(jet, weight, n_targets):
+def _merit_parts(jet, weight, n_targets, *, sqp):
     """(2,) the weighted objective and the l1 violation at a jet: the merit's two terms,
     which the line search's history keeps apart, to price them at a later penalty."""
-    return jnp.stack([weight * jet.v[0], _violation(jet.v[1:], n_targets)])
+    return jnp.stack([weight * jet.v[0], _violation(jet.v[1:], n_targets, sqp=sqp)])
 
 
-def _merit(jet, weight, nu, n_targets):
+def _merit(jet, weight, nu, n_targets, *, sqp):
     """The exact l1 merit function weight f + nu |violation|_1 at a jet."""
-    return _priced(_merit_parts(jet, weight, n_targets), nu)
+    return _priced(_merit_parts(jet, weight, n_targets, sqp=sqp), nu)
 
 
 def _priced(parts, nu):

@@ -10,9 +10,6 @@ import jax.numpy as jnp
 import optimistix as optx
 from jaxtyping import Array, Bool, Float
 
-from magdesign._numerics import (
-    DESIGN_SOLVABLE_RTOL,
-)
 from magdesign.design._linear import LUOrSVD
 from magdesign.design._sqp.jet import Jet, Settings, _first_jet, _lagrangian_hessian, _scaled_rows, _values
 from magdesign.design._sqp.step import _held_rows
@@ -146,7 +143,7 @@ def _implicit_derivatives(equations, z, jet, theta, usable):
     return jax.jacfwd(root_of)(theta)
 
 
-def _solvable(equations, z, jet, theta, dz):
+def _solvable(equations, z, jet, theta, dz, *, sqp):
     """(p,) bool: whether the linear system that the implicit derivatives dz (len(z), p)
     solve at the root z has a solution in each column of theta that is a target's value or
     a limit's bound (the others: True). Held rows that are dependent (a limit whose two
@@ -162,7 +159,7 @@ def _solvable(equations, z, jet, theta, dz):
     )  # (len(z), rows)
     reached = jax.vmap(lambda d: equations.tangent(jet, z, d), in_axes=1, out_axes=1)(dz[:, :n_rows])
     size = jnp.max(jnp.abs(moved), axis=0, initial=0.0) + jnp.max(jnp.abs(reached), axis=0, initial=0.0)
-    solvable = jnp.max(jnp.abs(reached + moved), axis=0, initial=0.0) <= DESIGN_SOLVABLE_RTOL * size
+    solvable = jnp.max(jnp.abs(reached + moved), axis=0, initial=0.0) <= sqp.solvable_rtol * size
     return jnp.concatenate([solvable, jnp.ones(theta.shape[0] - n_rows, bool)])
 
 

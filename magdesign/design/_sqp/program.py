@@ -14,6 +14,7 @@ from jaxtyping import Array
 from magdesign._tracing import compiler_options, errors_as_nan, gc_paused
 from magdesign.design._sqp.core import CoreSolution, _core
 from magdesign.design._sqp.jet import Settings, problem_arrays
+from magdesign.design._sqp.sqp import SQP
 from magdesign.design.problem import Problem, per_problem
 
 
@@ -120,9 +121,26 @@ def _joined(key, arrays):
     return jax.tree.unflatten(treedef, [next(arrays) if array else leaf for array, leaf in zip(is_array, static)])
 
 
+_IN_PROGRAM = {}  # id(settings) -> (settings, _in_program's answer); holds settings, so ids stay unique
+
+
+def _in_program(settings):
+    """``settings`` with the solver's fields that only batches read at their defaults
+    (:meth:`SQP.in_program`), so that those fields key no program of their own; one
+    object per ``settings`` object (building a Module costs more than a warm solve's
+    overhead)."""
+    entry = _IN_PROGRAM.get(id(settings))
+    if entry is None:
+        if len(_IN_PROGRAM) >= 64:
+            _IN_PROGRAM.clear()
+        program = Settings(settings.rtol, settings.atol, settings.max_steps, settings.sqp.in_program())
+        entry = _IN_PROGRAM[id(settings)] = (settings, program)
+    return entry[1]
+
+
 def _structure(problem, settings):
     """(key, arrays) of (problem, settings) for :func:`_compiled`."""
-    host, (settings_key, settings_leaves) = _host(problem), _split(settings)
+    host, (settings_key, settings_leaves) = _host(problem), _split(_in_program(settings))
     return (host.key, settings_key), (host.leaves, settings_leaves)
 
 
@@ -134,13 +152,17 @@ def _run(problem, y0, theta, settings):
 
 
 @functools.lru_cache(maxsize=16)
-def settings_of(rtol, atol, max_steps):
+def settings_of(rtol, atol, max_steps, sqp=None):
+    """The :class:`Settings` of a solve: tolerances rtol and atol (scaled), max_steps, and
+    the solver ``sqp`` (:class:`SQP`; None: its defaults); one object per distinct set."""
+    if sqp is not None and not isinstance(sqp, SQP):
+        raise TypeError(f"solver must be an SQP, got {type(sqp).__name__}")
     if not max_steps >= 1:
         raise ValueError(f"max_steps must be at least 1, got {max_steps!r}")
     for name, value in (("rtol", rtol), ("atol", atol)):
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be positive and finite, got {value!r}")
-    return Settings(np.asarray(rtol, np.float64), np.asarray(atol, np.float64), int(max_steps))
+    return Settings(np.asarray(rtol, np.float64), np.asarray(atol, np.float64), int(max_steps), SQP() if sqp is None else sqp)
 
 
 def _start(problem: Problem, start, arrays):

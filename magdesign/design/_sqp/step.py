@@ -9,26 +9,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
-from magdesign._numerics import (
-    DESIGN_ACTIVE_MULTIPLIER,
-    DESIGN_DEPENDENT_MET,
-    DESIGN_ELASTIC,
-    DESIGN_HELD_MULTIPLIER,
-    DESIGN_HESSIAN_FLOOR,
-    DESIGN_KEPT_CURVATURE,
-    DESIGN_NULL_SPACE_RTOL,
-    DESIGN_ON_CONSTRAINT,
-)
 from magdesign.design._qp import solve_qp
 from magdesign.design._sqp.jet import _lagrangian_hessian, _pick
 from magdesign.design._sqp.merit import _violation
-
-# The step ends on a limit or bound (with an objective: weakly active) within this, its
-# rounding: a limit 1e-13 of a box width inside a bound, taken for both, was held on both.
-_ROUNDED = 1e-15
-# A row's QP multiplier within this (relative) of DESIGN_ELASTIC is the elastic price: the
-# row's slack is in use.
-_ELASTIC_ROUNDING = 1e-6
+from magdesign.design._sqp.sqp import SQP
 
 
 class _Step(eqx.Module):
@@ -66,34 +50,38 @@ def subproblem_box(n, n_targets, n_limits):
     return variables, np.concatenate([np.ones(n), -np.ones(n + n_slack)])
 
 
-def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius=jnp.inf):
-    """The QP of one step, (Q, q, A, b, G, h), holding no limit: :func:`_subproblem`'s first part."""
-    return _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, None)[0]
+def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius=jnp.inf, *, sqp=None):
+    """The QP of one step, (Q, q, A, b, G, h), holding no limit: :func:`_subproblem`'s first part
+    (``sqp``: the solver's thresholds, default :class:`SQP`'s)."""
+    sqp = SQP() if sqp is None else sqp
+    return _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, None, sqp=sqp)[0]
 
 
-def _definite(eigenvalues, size):
-    """The moduli of a Hessian's ``eigenvalues``, those below DESIGN_KEPT_CURVATURE times
-    ``size`` raised to DESIGN_HESSIAN_FLOOR times it; and where they were kept."""
+def _definite(eigenvalues, size, *, sqp):
+    """The moduli of a Hessian's ``eigenvalues``, those below sqp.kept_curvature times
+    ``size`` raised to sqp.hessian_floor times it; and where they were kept."""
     moduli = jnp.abs(eigenvalues)
-    kept = moduli >= DESIGN_KEPT_CURVATURE * size
-    return jnp.maximum(moduli, jnp.where(kept, 0.0, DESIGN_HESSIAN_FLOOR * size)), kept
+    kept = moduli >= sqp.kept_curvature * size
+    return jnp.maximum(moduli, jnp.where(kept, 0.0, sqp.hessian_floor * size)), kept
 
 
-def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits, last_held=None):
+def _subproblem(
+    jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits, last_held=None, *, sqp
+):
     """((Q, q, A, b, G, h), flat): the QP of one step at y for :func:`solve_qp`, and the
     flat directions of its Hessian (n, n) (the eigenvectors that got the floor; the
     others zeroed; those of the whole Hessian, where the dependent rows split it). The
     QP: minimise the quadratic model of the Lagrangian subject to the linearised rows and
     the box, each target row relaxed by two elastic slacks and each limit row by one,
-    costing DESIGN_ELASTIC per unit: w = (d, slack+, slack-, slack of limits),
+    costing sqp.elastic per unit: w = (d, slack+, slack-, slack of limits),
     |d_i| <= radius. The quadratic term is the Hessian of the Lagrangian with its
-    eigenvalues' moduli, those below DESIGN_HESSIAN_FLOOR (relative) raised to it, except
-    one above DESIGN_KEPT_CURVATURE, which stays (see there), and less the floor again
+    eigenvalues' moduli, those below sqp.hessian_floor (relative) raised to it, except
+    one above sqp.kept_curvature, which stays (see there), and less the floor again
     along the gradients of the targets and of the ``held_limits`` (l,) (bool; None: none)
     projected onto the flat directions, where their linearisation fixes the step. Where the
     rows and bounds ``last_held`` ((m,), (n,) bool: those that the last step held; None:
     none) are dependent at a point that meets the rows, the Hessian on their null space
-    is the Lagrangian's own there made definite (DESIGN_DEPENDENT_MET). Without an
+    is the Lagrangian's own there made definite (sqp.dependent_met). Without an
     objective it is |d|^2 / 2 (the minimum-norm step of Gauss-Newton)."""
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
@@ -103,8 +91,8 @@ def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, ra
     eigenvalues, vectors = jnp.linalg.eigh(lagrangian)
     if has_objective:
         size = 1.0 + jnp.max(jnp.abs(eigenvalues))
-        floor = DESIGN_HESSIAN_FLOOR * size
-        moduli, kept = _definite(eigenvalues, size)
+        floor = sqp.hessian_floor * size
+        moduli, kept = _definite(eigenvalues, size, sqp=sqp)
     else:
         moduli = jnp.maximum(jnp.abs(eigenvalues), 1.0)
     hessian = (vectors * moduli) @ vectors.T
@@ -118,31 +106,31 @@ def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, ra
         # the floor's curvature along the target's line and crawled (steps of 1/130 of
         # Newton's, "max_steps_reached" 4e-4 from the minimum). Off: on the span of the
         # targets' gradients projected onto the flat directions (regularised by
-        # DESIGN_NULL_SPACE_RTOL of their squared sizes, so that a gradient barely in the
+        # sqp.null_space_rtol of their squared sizes, so that a gradient barely in the
         # flat directions removes barely any floor). Limits only where a first solve
         # holds them (see _settled_step): which hold is known only after the QP (with the
         # last step's active ones, hs106's polish ended 1.9e-10 outside a limit).
         spread = flat @ (flat.T @ fixing.T)  # (n, rows)
         gram = spread.T @ spread
-        gram = gram + DESIGN_NULL_SPACE_RTOL * (1.0 + jnp.trace(gram)) * jnp.eye(fixing.shape[0])
+        gram = gram + sqp.null_space_rtol * (1.0 + jnp.trace(gram)) * jnp.eye(fixing.shape[0])
         hessian = hessian - floor * spread @ jnp.linalg.solve(gram, spread.T)
     if has_objective and last_held is not None:
         # the cross terms between the null space and the rows' span are dropped (the rows'
         # linearisation fixes the step's part in their span)
         rows, fixed = last_held
-        singular_vectors, null = _null_space(_active_matrix(jet, rows, fixed))
+        singular_vectors, null = _null_space(_active_matrix(jet, rows, fixed), sqp=sqp)
         # (n, n) each, the other's columns zeroed
         free, spanned = singular_vectors * null, singular_vectors * ~null
         dependent = (jnp.sum(rows) + jnp.sum(fixed) > jnp.sum(~null)) & jnp.any(null)
-        dependent = dependent & (_violation(c, n_targets) <= DESIGN_DEPENDENT_MET)
+        dependent = dependent & (_violation(c, n_targets, sqp=sqp) <= sqp.dependent_met)
         reduced_eigenvalues, reduced_vectors = jnp.linalg.eigh(free.T @ lagrangian @ free)
-        reduced = (reduced_vectors * _definite(reduced_eigenvalues, size)[0]) @ reduced_vectors.T
+        reduced = (reduced_vectors * _definite(reduced_eigenvalues, size, sqp=sqp)[0]) @ reduced_vectors.T
         split = free @ reduced @ free.T + spanned @ (spanned.T @ hessian @ spanned) @ spanned.T
         hessian = jnp.where(dependent, split, hessian)
     n_slack = 2 * n_targets + n_limits
     nw = n + n_slack
     Q = jnp.zeros((nw, nw)).at[:n, :n].set(hessian)
-    q = jnp.concatenate([weight * jet.J[0], jnp.full(n_slack, DESIGN_ELASTIC)])
+    q = jnp.concatenate([weight * jet.J[0], jnp.full(n_slack, sqp.elastic)])
     eye_t, eye_l = jnp.eye(n_targets), jnp.eye(n_limits)
     A = jnp.concatenate([J_c[:n_targets], -eye_t, eye_t, jnp.zeros((n_targets, n_limits))], axis=1)
     G = jnp.concatenate(
@@ -157,21 +145,21 @@ def _subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, ra
     return (Q, q, A, -c[:n_targets], G, h), flat
 
 
-def _elastic(multipliers):
-    """Where multipliers are priced at the elastic cost (DESIGN_ELASTIC, to rounding): their
+def _elastic(multipliers, *, sqp):
+    """Where multipliers are priced at the elastic cost (sqp.elastic, to rounding): their
     rows' linearisation cannot be met."""
-    return jnp.abs(multipliers) >= (1.0 - _ELASTIC_ROUNDING) * DESIGN_ELASTIC
+    return jnp.abs(multipliers) >= (1.0 - sqp.elastic_rounding) * sqp.elastic
 
 
-def _last_held(last: _Step, bound_multipliers):
+def _last_held(last: _Step, bound_multipliers, *, sqp):
     """((m,), (n,)) bool: the rows and bounds that the ``last`` step held, with its bounds'
     multipliers (2n,); not the rows priced at the elastic cost (:func:`_elastic`)."""
     lower, upper = jnp.split(bound_multipliers, 2)
-    fixed = (jnp.maximum(lower, upper) > DESIGN_ACTIVE_MULTIPLIER) | last.at_lower | last.at_upper
-    return _held_rows(last) & ~_elastic(last.multipliers), fixed
+    fixed = (jnp.maximum(lower, upper) > sqp.active_multiplier) | last.at_lower | last.at_upper
+    return _held_rows(last) & ~_elastic(last.multipliers, sqp=sqp), fixed
 
 
-def _hessian_multipliers(jet, last: _Step, bound_multipliers, last_held):
+def _hessian_multipliers(jet, last: _Step, bound_multipliers, last_held, *, sqp):
     """(m,) the multipliers that weight the rows' Hessians in the next subproblem: the
     ``last`` step's, those of its active rows (``last_held``, :func:`_last_held`) replaced
     by the least-norm ones that give the same combination of gradients, with the bounds'
@@ -191,15 +179,17 @@ def _hessian_multipliers(jet, last: _Step, bound_multipliers, last_held):
     matrix = _active_matrix(jet, rows, fixed)  # (m + n, n)
     weights = jnp.concatenate([jnp.where(rows, last.multipliers, 0.0), jnp.where(fixed, upper - lower, 0.0)])
     combined = matrix.T @ weights
-    least = jnp.linalg.pinv(matrix.T, rtol=DESIGN_NULL_SPACE_RTOL) @ combined
+    least = jnp.linalg.pinv(matrix.T, rtol=sqp.null_space_rtol) @ combined
     return jnp.where(rows, least[: last.multipliers.shape[0]], last.multipliers)
 
 
-def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_objective, radius, held_limits=None):
+def _step(
+    jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_objective, radius, held_limits=None, *, sqp
+):
     """The :func:`subproblem`'s solution at y, its QP's rows active at the ``last`` step
     taken as a guess; the ``last`` step's multipliers, with its ``bound_multipliers``
     (2n,), weight the rows' Hessians (:func:`_hessian_multipliers`). The active set is
-    the rows and bounds that the step ends on (within DESIGN_ON_CONSTRAINT without an
+    the rows and bounds that the step ends on (within sqp.on_constraint without an
     objective, whose multipliers say nothing; with one, to rounding) and those with a
     positive multiplier (a bound only where it, not the ``radius``, limits the step).
     ``held_limits``: see :func:`_subproblem`. Returns the :class:`_Step`, the bounds'
@@ -209,10 +199,12 @@ def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_
     n = y.shape[0]
     c, J_c = jet.v[1:], jet.J[1:]
     n_limits = c.shape[0] - n_targets
-    last_held = _last_held(last, bound_multipliers) if has_objective else None
-    multipliers = _hessian_multipliers(jet, last, bound_multipliers, last_held) if has_objective else last.multipliers
+    last_held = _last_held(last, bound_multipliers, sqp=sqp) if has_objective else None
+    multipliers = (
+        _hessian_multipliers(jet, last, bound_multipliers, last_held, sqp=sqp) if has_objective else last.multipliers
+    )
     (Q, q, A, b, G, h), flat = _subproblem(
-        jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits, last_held
+        jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits, last_held, sqp=sqp
     )
     qp = solve_qp(Q, q, A, b, G, h, guess=last.qp_rows, box=subproblem_box(n, n_targets, n_limits))
     # A subproblem that failed (non-finite) offers no step; the polish then judges the point.
@@ -234,7 +226,7 @@ def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_
         # variable on it.
         active = ((limit_multipliers, limit_slack), (lower_multipliers, lower_slack), (upper_multipliers, upper_slack))
         active_limits, at_lower, at_upper = (
-            multiplier > jnp.maximum(DESIGN_ACTIVE_MULTIPLIER, slack) for multiplier, slack in active
+            multiplier > jnp.maximum(sqp.active_multiplier, slack) for multiplier, slack in active
         )
         # (a bound's multiplier below its slack is no multiplier; where the radius, not the
         # bound, limits the step it is the radius's, kept for the Hessian's multipliers)
@@ -246,28 +238,28 @@ def _step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, has_
         # Those the step ends on to rounding are active too, with no multiplier (weakly): at
         # hs108's optimum x9 >= 0, x3 x9 >= 0 and -x5 x9 >= 0 hold so, and without them it
         # ended "limit_violated" (the polish, holding the rows with a multiplier, moved along
-        # the optimum's manifold to x9 < 0). Within DESIGN_ON_CONSTRAINT, a limit 1e-10 below
+        # the optimum's manifold to x9 < 0). Within sqp.on_constraint, a limit 1e-10 below
         # a bound brought the bound in too, and the polish split the two.
-        weakly = ends_on(_ROUNDED)
+        weakly = ends_on(sqp.rounded)
         held = (active_limits, at_lower, at_upper)
         active_limits, at_lower, at_upper = (strong | weak for strong, weak in zip(held, weakly))
     else:
-        active_limits, at_lower, at_upper = ends_on(DESIGN_ON_CONSTRAINT)
-    # The limits that the step holds by a multiplier (above DESIGN_HELD_MULTIPLIER, and not
+        active_limits, at_lower, at_upper = ends_on(sqp.on_constraint)
+    # The limits that the step holds by a multiplier (above sqp.held_multiplier, and not
     # priced at the elastic cost) and whose gradients reach into the flat directions:
     # _settled_step solves again with the floor off along them.
     J_l = J_c[n_targets:]
-    reach = jnp.sum((flat.T @ J_l.T) ** 2, axis=0) > DESIGN_NULL_SPACE_RTOL * jnp.sum(J_l**2, axis=1)
-    holds = (limit_multipliers > jnp.maximum(DESIGN_HELD_MULTIPLIER, limit_slack)) & ~_elastic(limit_multipliers)
+    reach = jnp.sum((flat.T @ J_l.T) ** 2, axis=0) > sqp.null_space_rtol * jnp.sum(J_l**2, axis=1)
+    holds = (limit_multipliers > jnp.maximum(sqp.held_multiplier, limit_slack)) & ~_elastic(limit_multipliers, sqp=sqp)
     return (
         _Step(
             d=d,
             multipliers=jnp.concatenate([qp.y, limit_multipliers]),
-            linear_violation=_violation(linearised, n_targets),
+            linear_violation=_violation(linearised, n_targets, sqp=sqp),
             active_limits=active_limits,
             at_lower=at_lower,
             at_upper=at_upper,
-            qp_rows=qp.z > DESIGN_ACTIVE_MULTIPLIER,
+            qp_rows=qp.z > sqp.active_multiplier,
         ),
         jnp.concatenate([lower_multipliers, upper_multipliers]),
         (holds & reach, solved),
@@ -289,7 +281,7 @@ class _Solves(NamedTuple):
     held_limits: Array
 
 
-def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, radius, xtol):
+def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, radius, xtol, *, sqp):
     """:func:`_step` with an objective, solved up to three times: one QP in a loop, not
     three QPs, so the program stays the size it was.
 
@@ -297,7 +289,7 @@ def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targe
     as :func:`_hessian_multipliers` makes them, and its active rows are the QP's guess),
     runs where the first step is shorter than ``xtol``: the first solve's Hessian takes the
     ``last`` point's multipliers, which after an infeasible (elastic) subproblem are priced
-    at DESIGN_ELASTIC and then fall by orders of magnitude a step; a Hessian that large
+    at sqp.elastic and then fall by orders of magnitude a step; a Hessian that large
     makes a step short at a point that is not stationary (hs063 stopped after 6 steps,
     "infeasible_target", with the objective's gradient 0.3 off the constraints' span).
 
@@ -314,7 +306,7 @@ def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targe
     def solve(solves):
         source = _pick(solves.trips == 0, (last, bound_multipliers), (solves.first, solves.first_bound_multipliers))
         held = solves.held_limits & (solves.trips == 1)
-        step, multipliers, (reaching, solved) = _step(jet, y, y_max, *source, weight, n_targets, True, radius, held)
+        step, multipliers, (reaching, solved) = _step(jet, y, y_max, *source, weight, n_targets, True, radius, held, sqp=sqp)
         first = solves.trips == 0
         return _Solves(
             step,
@@ -349,9 +341,9 @@ def _active_matrix(jet, rows, fixed):
     return jnp.concatenate([jnp.where(rows[:, None], jet.J[1:], 0.0), jnp.where(fixed[:, None], jnp.eye(n), 0.0)])
 
 
-def _null_space(matrix):
+def _null_space(matrix, *, sqp):
     """((n, n), (n,)): the right singular vectors of an (m + n, n) ``matrix`` as columns,
-    and which of them span its null space (singular value below DESIGN_NULL_SPACE_RTOL of
+    and which of them span its null space (singular value below sqp.null_space_rtol of
     the largest)."""
     _, singular, vt = jnp.linalg.svd(matrix, full_matrices=False)
-    return vt.T, singular <= DESIGN_NULL_SPACE_RTOL * jnp.max(singular, initial=0.0)
+    return vt.T, singular <= sqp.null_space_rtol * jnp.max(singular, initial=0.0)
