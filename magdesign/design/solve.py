@@ -88,7 +88,6 @@ def solve(
     return DesignResult.from_core(problem, _unpack(problem, packed), host.arrays[4], seconds, settings.rtol)
 
 
-
 def multistart(
     problem: Problem,
     starts: dict,

@@ -124,7 +124,9 @@ def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
     # successful (a point that breaks a target or a limit, a saddle, a search cut short), where
     # the polish was not kept or its implicit solve failed; never a plain 0 that reads as
     # "insensitive", nor a number that reads as the sensitivity of a design that is not one.
-    derivatives = jnp.where((status == status_code("successful")) & kept & jnp.isfinite(dy), scale[:, None] * dy, jnp.nan)
+    derivatives = jnp.where(
+        (status == status_code("successful")) & kept & jnp.isfinite(dy), scale[:, None] * dy, jnp.nan
+    )
     m = len(problem.targets) + len(problem.limit_rows)  # without _evaluate's row that never binds
     return CoreSolution(
         x=lower + scale * y,

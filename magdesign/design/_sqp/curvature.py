@@ -2,7 +2,6 @@
 space, the directions to escape or probe along, their second-order corrections, the
 faces of a cone of weakly active rows, and the room along a direction."""
 
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -69,10 +68,6 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_ta
     # both corrections from one pseudo-inverse: under vmap it depends on neither direction
     w, wu = jax.vmap(lambda d: _bend(jet, d, strong, fixed, sqp=sqp))(jnp.stack([v, u]))
     return eigenvalues[0] / size, v, w, u, wu
-
-
-
-
 
 
 def _saddle_on_faces(jet, step: _Step, bound_multipliers, weight, y, y_max, n_targets, *, sqp):

@@ -1,7 +1,6 @@
 """The solver's settings, a problem's arrays, and its model's jet (values, first and
 second derivatives) at a scaled point."""
 
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp

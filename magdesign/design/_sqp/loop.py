@@ -1,7 +1,6 @@
 """The search and the polish as one loop: the search's phases and state, the line search
 on the merit, the escapes and probes, and the polish stepped in the same loop."""
 
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -23,7 +22,6 @@ from magdesign.design.problem import Problem
 # once; the search ends at the first phase from CONVERGED on (and the loop goes on with
 # the polish).
 START, SEARCH, ESCAPE, PROBE, CONVERGED, STALLED, NOT_MINIMUM, NONFINITE_START = range(8)
-
 
 
 class _State(eqx.Module):
@@ -155,7 +153,9 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
             point was called "not_a_minimum"."""
             v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
             box = jnp.stack([_room(y, v, y_max), _room(y, -v, y_max)])
-            held = jnp.minimum(box, jnp.stack([_limits_room(jet, v, n_targets, sqp=sqp), _limits_room(jet, -v, n_targets, sqp=sqp)]))
+            held = jnp.minimum(
+                box, jnp.stack([_limits_room(jet, v, n_targets, sqp=sqp), _limits_room(jet, -v, n_targets, sqp=sqp)])
+            )
             wider = (held[1] > held[0]) | ((held[1] == held[0]) & (box[1] > box[0]))
             flip = (jnp.dot(gradient, v) == 0.0) & wider
             return jnp.where(flip, -v, v), jnp.where(flip, box[1], box[0]), jnp.max(held)
@@ -298,7 +298,9 @@ def _search_and_polish(problem: Problem, y0, theta, settings: Settings, y_max) -
         # accepted point its pseudo-inverse would cost a batched sweep 1.7 times its time.
         # Without an objective there are no Hessians (see _jet), and the steps go straight.
         may_bend = (state.phase == SEARCH) & ~state.bent & (alpha == 1.0) & ~good & (problem.objective is not None)
-        correction = where_needed(may_bend, lambda operands: _bend(*operands, sqp=sqp), bend_operands(state), state.correction)
+        correction = where_needed(
+            may_bend, lambda operands: _bend(*operands, sqp=sqp), bend_operands(state), state.correction
+        )
         bend = may_bend & jnp.any(correction != 0.0)
         next_alpha = jnp.where(probing, jnp.where(alpha > 0.0, -alpha, -alpha * sqp.probe_shrink), 0.5 * alpha)
         next_alpha = jnp.where(bend, alpha, next_alpha)

@@ -1,7 +1,6 @@
 """The exact l1 merit function of the line search: the weighted objective and the
 violation of the scaled constraint rows."""
 
-
 import jax.numpy as jnp
 
 

@@ -1,7 +1,6 @@
 """The polish: Newton (optimistix) on the KKT or feasibility equations of the search's
 active set, and the implicit derivatives of its root (optimistix's implicit adjoint)."""
 
-
 from typing import TYPE_CHECKING
 
 import equinox as eqx

@@ -162,7 +162,9 @@ def settings_of(rtol, atol, max_steps, sqp=None):
     for name, value in (("rtol", rtol), ("atol", atol)):
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be positive and finite, got {value!r}")
-    return Settings(np.asarray(rtol, np.float64), np.asarray(atol, np.float64), int(max_steps), SQP() if sqp is None else sqp)
+    return Settings(
+        np.asarray(rtol, np.float64), np.asarray(atol, np.float64), int(max_steps), SQP() if sqp is None else sqp
+    )
 
 
 def _start(problem: Problem, start, arrays):

@@ -306,7 +306,9 @@ def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targe
     def solve(solves):
         source = _pick(solves.trips == 0, (last, bound_multipliers), (solves.first, solves.first_bound_multipliers))
         held = solves.held_limits & (solves.trips == 1)
-        step, multipliers, (reaching, solved) = _step(jet, y, y_max, *source, weight, n_targets, True, radius, held, sqp=sqp)
+        step, multipliers, (reaching, solved) = _step(
+            jet, y, y_max, *source, weight, n_targets, True, radius, held, sqp=sqp
+        )
         first = solves.trips == 0
         return _Solves(
             step,
