@@ -91,7 +91,7 @@ print(time.perf_counter() - began, result.status)
 # fusions and instructions.
 FIRST_CALL_STAGES = """
 import importlib, re, resource, time
-from magdesign._tracing import gc_paused
+from magdesign._tracing import errors_as_nan, gc_paused
 from magdesign.design.spec import default_spec, problem_from_spec
 solver = importlib.import_module("magdesign.design.solve")
 problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
@@ -100,7 +100,7 @@ key, arrays = solver._structure(problem, settings)
 host = solver._host(problem)
 program = solver._compiled(key, False)
 clock = lambda: (time.perf_counter(), sum(resource.getrusage(resource.RUSAGE_SELF)[:2]))
-with solver._errors_as_nan(), gc_paused():
+with errors_as_nan(), gc_paused():
     began = clock()
     traced = program.trace(arrays, host.y0, host.theta)
     traced_at = clock()

@@ -61,7 +61,8 @@ def safe_log(x, at_zero=0.0):
     return jnp.where(bad, at_zero, jnp.log(jnp.where(bad, 1.0, x)))
 
 
-# Thresholds of the design solver (magdesign.design.solve). All act on dimensionless
+# Default tolerances of the design solver (magdesign.design.solve's rtol and atol; its other
+# thresholds are the fields of magdesign.design._sqp.sqp.SQP). Both act on dimensionless
 # quantities: variables scaled to their bound width, residuals scaled by their target.
 # Default tolerance on scaled target and limit residuals: 1e-10 leaves a margin of 10 below
 # the 1e-9 relative accuracy the designs are checked to; the final Newton polish stops
@@ -72,101 +73,9 @@ DESIGN_ATOL = 1e-13
 # A chip's saturation_ratio counts as clipping above 1 + CLIP_RTOL: a design held at its chip's
 # range reads 1 to the design solver's tolerance (DESIGN_RTOL), far below this.
 CLIP_RTOL = 1e-6
-# Designs solved per compiled batch of a sweep: bounds its memory (the Reissner-level default
-# design takes about 1 kB per point) while keeping the per-call overhead small.
-DESIGN_CHUNK = 4096
-# A sweep of up to DESIGN_CHUNK * DESIGN_PROGRESS_STEPS points goes in at least about this many
-# chunks (sizes a power of two), so that its progress bar moves and Ctrl-C, which takes effect
-# between chunks, stops it soon; a vmapped lane's answer does not depend on its chunk's size.
-DESIGN_PROGRESS_STEPS = 16
 # Values that spread by less than this fraction of their size are one number up to rounding:
 # reports and pictures show the number, not its noise (sweep maps, tolerance histograms).
 ROUNDING_SPREAD = 1e-9
-# The most working memory (bytes, XLA's estimate for the compiled batch) a chunk may take;
-# a model that needs more per point gets smaller chunks.
-DESIGN_BATCH_MEMORY = 1 << 30
-# A model with loops of its own whose single solve takes longer than this (s) is swept a point
-# per call on parallel threads, not in vmapped batches whose lanes wait for the slowest: an
-# axisymmetric dome's design takes 0.6-0.9 s, a soft part's saturation solve at the Reissner
-# level well under a millisecond (batched, 17,000-19,000 solves/s).
-DESIGN_POINT_SECONDS = 0.02
-# Such a sweep solves its points in runs of this many (in the order given): the first of each
-# from its own start, each next one from the first-order prediction of its optimum by the
-# one before and its implicit derivatives (continuation): 2.4 search steps a point, against
-# 4.4 each from its own start, over 40 axisymmetric default designs (0.25-0.40 mm/N).
-DESIGN_CHAIN = 8
-# Sequential quadratic programming (design solver). The objective is scaled to a unit
-# gradient at the start and the constraints to their targets, so multipliers are O(1)-O(100)
-# (larger only from a start within DESIGN_GRADIENT_FLOOR of a stationary point, where the
-# objective's scale comes from its Hessian):
-# - the cost per unit of an elastic slack of the QP (a target or limit row relaxed where
-#   its linearisation cannot be met): far above any multiplier, so that a linearisation
-#   that can be met is met exactly;
-DESIGN_ELASTIC = 1e6
-# - the smallest eigenvalue of the QP's Hessian, relative to its largest (plus 1): the
-#   Hessian of the Lagrangian with its eigenvalues' moduli, made definite by this floor
-#   (which bounds a step where the model is flat to 1e4 box widths, so the QP's own
-#   1e-12 residuals move it by 1e-8 at most; not where the targets fix the step, nor the
-#   limits that a first solve holds with a multiplier above DESIGN_HELD_MULTIPLIER, in a
-#   second solve: a multiplier as small as hs084's 2e-8 held its limit too weakly to stand
-#   in for the floor, and the steps went to and fro to "max_steps_reached");
-DESIGN_HESSIAN_FLOOR = 1e-4
-DESIGN_HELD_MULTIPLIER = 1e-4
-#   a curvature of either sign whose modulus is above DESIGN_KEPT_CURVATURE (relative, as
-#   that floor) keeps its modulus: raised to the floor, a degenerate minimum's vanishing
-#   curvature (x^4 at 0) turned Newton's steps into gradient steps that crawl (min x^4
-#   ended "max_steps_reached" 4e-4 from 0; Newton's steps there shrink by 2/3 each), and so
-#   did a gently concave direction beside a stiff one (hs057's x2, 1e-7 of x1's curvature:
-#   steps of 3e-6 box widths). The floor still bounds the flat directions, where a step has
-#   no curvature to stop it;
-DESIGN_KEPT_CURVATURE = 1e-8
-#   where the rows and bounds that the last step held are dependent (more of them than
-#   their rank) at a point that meets every row within DESIGN_DEPENDENT_MET (l1, scaled),
-#   the Hessian is made definite on their null space apart from the rest: there the
-#   moduli of the whole Hessian's curvatures of both signs add up, and at hs116's optimum
-#   (13 rows of rank 12 in 13 variables, curvatures from -6.8 to 6.7) they gave the one
-#   direction left free a curvature of 0.73 where the Lagrangian's own is 0: steps of
-#   6e-5 crawled to "max_steps_reached" 1e-5 (relative) above the optimum's value;
-DESIGN_DEPENDENT_MET = 1e-5
-# - a limit row or bound is active where its QP multiplier exceeds this (with an
-#   objective; also where the step ends on it to rounding, weakly active), or where the
-#   step ends within DESIGN_ON_CONSTRAINT of it (without one);
-DESIGN_ACTIVE_MULTIPLIER = 1e-8
-DESIGN_ON_CONSTRAINT = 1e-9
-# - negative curvature of the Lagrangian on the active constraints' null space below
-#   -DESIGN_CURVATURE_TOL (relative to its largest curvature, plus 1) means a stationary
-#   point is no minimum; the search leaves it along that direction at most
-#   DESIGN_ESCAPES times.
-DESIGN_CURVATURE_TOL = 1e-7
-DESIGN_ESCAPES = 4
-# - a stationary point whose least curvature there is below this (relative, as above) is
-#   probed for a lower merit on both sides of that direction before it is accepted (a
-#   third- or fourth-order saddle such as x^3 at 0 has zero curvature);
-DESIGN_FLAT_CURVATURE = 1e-6
-# - the objective's scale (1 / its gradient's norm at the start) counts a gradient no
-#   smaller than this times its Hessian's norm there (scaled variables): a start next to
-#   a minimum, such as a sweep's prediction of its next optimum, has a gradient of
-#   rounding size, and 1 / |gradient| blew the polish's residual up to O(1) there;
-DESIGN_GRADIENT_FLOOR = 1e-6
-# - the active constraints' null space: directions whose singular value is below this,
-#   relative to the largest, are free (the rows are O(1) gradients, so 1e-9 separates a
-#   dependent row from rounding by several decades either way); also the regulariser,
-#   relative to their squared sizes (plus 1), of the targets' and held limits' gradients
-#   on the flat directions of the QP's Hessian, whose floor is taken off along them; and
-#   the least share of a limit's squared gradient on those directions for a second
-#   solve to hold it;
-DESIGN_NULL_SPACE_RTOL = 1e-9
-# - the polish (a Newton root find on the KKT or feasibility equations) refines the
-#   search's point; a root further than this (scaled variables, box width 1) from it is
-#   another solution of the equations, and the search's point stands, judged by its own
-#   stationarity, unless (with an objective) the root meets the equations to the design's
-#   tolerance at an objective no higher, its multipliers of the right sign (Newton's slow
-#   steps from a flat minimum, x^6's, or its exact step across an ill-conditioned one);
-DESIGN_POLISH_REACH = 1e-4
-# - the implicit derivatives with respect to a target's value or a limit's bound exist
-#   where the linear system they solve has a solution: its residual at the least-squares
-#   answer within this (relative to the sizes of its two terms);
-DESIGN_SOLVABLE_RTOL = 1e-6
 
 
 # Width of the smoothed contact ramp, as a fraction of the length it is applied to (the
@@ -301,12 +210,6 @@ def safe_atan2(y, x):
     is_zero = scale == 0.0
     safe_scale = jnp.where(is_zero, 1.0, scale)
     return jnp.where(is_zero, 0.0, jnp.arctan2(y / safe_scale, jnp.where(is_zero, 1.0, x / safe_scale)))
-
-
-# Fraction of a variable's bound width by which the design solver moves a start where the
-# model is flat in every direction (no gradient, so no step): large enough to leave an
-# exactly symmetric point, small enough not to change which optimum is found nearby.
-DESIGN_START_NUDGE = 1e-3
 
 
 # Saturating soft bodies (fields.soft): Newton's method on the cells' polarisation J (T)

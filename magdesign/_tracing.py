@@ -98,3 +98,31 @@ def has_loops(fn, *args) -> bool:
         return False
 
     return loops_in(jax.make_jaxpr(fn)(*args).jaxpr)
+
+
+@contextlib.contextmanager
+def errors_as_nan():
+    """While the design solver's core is traced and lowered, equinox's runtime errors become
+    NaN: the linear solves of optimistix's implicit adjoint (lineax raises on a non-finite
+    answer), a soft part's saturation solve. The core reports NaN as a status
+    ("nonfinite") or as NaN derivatives, so it never raises; and a runtime error is a
+    host callback, which keeps a program out of JAX's persistent compilation cache, so
+    that the command would compile the solver afresh on every run. equinox reads its
+    error mode (``EQX_ON_ERROR``) from the environment once, on import, and offers no
+    public switch for a block of code: this and :func:`traced_once` are the one place
+    that sets and reads two private names of equinox (0.13). Where they are missing,
+    errors stay errors and the cache misses, which tests/test_cli.py notices."""
+    names = ("EQX_ON_ERROR", "branched_error_if_impl_jit")
+    if not all(hasattr(_equinox_errors, name) for name in names):
+        yield
+        return
+    saved = [getattr(_equinox_errors, name) for name in names]
+    # the unjitted check reads EQX_ON_ERROR when traced; the jitted one would reuse a
+    # trace made outside this block
+    _equinox_errors.EQX_ON_ERROR = "nan"
+    _equinox_errors.branched_error_if_impl_jit = _equinox_errors.branched_error_if_impl
+    try:
+        yield
+    finally:
+        for name, value in zip(names, saved):
+            setattr(_equinox_errors, name, value)

@@ -18,7 +18,7 @@ from jaxtyping import ArrayLike
 from magdesign._numerics import DESIGN_ATOL, DESIGN_RTOL
 from magdesign.design.problem import Problem, source_of
 from magdesign.design.report import DesignSweep
-from magdesign.design.solve import _host, _start, settings_of, solve_batch
+from magdesign.design.solve import SQP, batch_inputs, settings_of, solve_batch
 from magdesign.scene import parameters
 from magdesign.spec.sizes import check_fits
 
@@ -99,6 +99,7 @@ def sweep(
     progress: bool | None = None,
     over_units: dict | None = None,
     continuation: bool = True,
+    solver: SQP | None = None,
 ) -> DesignSweep:
     """Solve ``problem`` at every point of a grid (or list) of its inputs, in compiled,
     chunked batches split over the local devices, or, for a model with slow loops of its own
@@ -111,15 +112,15 @@ def sweep(
             with ``values`` (the older ``sweep(problem, "compliance", values)``).
         grid: True: every combination, shape (k1, k2, ...); False: the lists (all of one
             length) taken together, point by point, shape (k,).
-        start, rtol, atol, max_steps: as in :func:`~magdesign.design.solve`; one start for
-            every point.
-        chunk: the most points per compiled batch (memory); default DESIGN_CHUNK. Not
+        start, rtol, atol, max_steps, solver: as in :func:`~magdesign.design.solve`; one
+            start for every point.
+        chunk: the most points per compiled batch (memory); default ``SQP.chunk``. Not
             used where the points go one at a time.
         progress: a progress bar: True, False, or None (when stderr is a terminal and the
             sweep takes more than a second).
         over_units: display units of the swept keys, for tables.
         continuation: where the points go one at a time, start each (but the first of
-            every DESIGN_CHAIN) from the optimum that the point before predicts with its
+            every ``SQP.chain``) from the optimum that the point before predicts with its
             implicit derivatives, and solve it again from ``start`` where that fails
             (fewer steps a point; a problem with several optima may then find another);
             False: every point from ``start``. Not used in batches.
@@ -163,12 +164,9 @@ def sweep(
     ]
     problem = with_fixed(problem, [key for key in points if key not in rows])
     columns = rows + list(problem.fixed_names)
-    arrays = _host(problem).arrays
-    count = int(np.prod(shape))
-    thetas = np.repeat(arrays[4][None, :], count, axis=0)
+    y0, thetas = batch_inputs(problem, start, int(np.prod(shape)))
     for key, column in points.items():
         thetas[:, columns.index(key)] = column
-    y0 = np.broadcast_to(_start(problem, start, arrays), (count, len(problem.variables)))
     units = {t.output: t.unit for t in problem.targets}
     units.update({f"{lim.output}.{side}": lim.unit for lim in problem.limits for side in lim.sides})
     units.update(over_units or {})
@@ -176,7 +174,7 @@ def sweep(
         problem,
         y0,
         thetas,
-        settings_of(rtol, atol, max_steps),
+        settings_of(rtol, atol, max_steps, solver),
         chunk=chunk,
         progress=progress,
         continuation=continuation,

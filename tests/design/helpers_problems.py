@@ -749,7 +749,7 @@ HOCK_SCHITTKOWSKI = [
     # hs116 (a three-stage membrane separation) ended "max_steps_reached" 1e-5 (relative) above
     # f*: at its optimum the 11 active limits and 2 active bounds have rank 12 in 13
     # variables, and the QP's Hessian, made definite as a whole, gave the one free direction
-    # a curvature where the Lagrangian has none (DESIGN_DEPENDENT_MET). The book's f* =
+    # a curvature where the Lagrangian has none (SQP.dependent_met). The book's f* =
     # 97.588409 is 1e-5 (relative) above the local minimum next to its x*; x* and f* here are
     # that minimum, found from the book's x* by scipy's SLSQP and then Newton's method on the
     # KKT equations of its active set (scipy.optimize.root; a scratch check, independent of

@@ -632,8 +632,12 @@ def test_a_line_of_minima_is_accepted_after_its_probe():
 
 
 def test_statuses_are_one_enumeration():
+    """STATUS_NAMES names DesignStatus's members in the order of their codes."""
     assert STATUS_NAMES[0] == "successful"
-    assert set(STATUS_NAMES) == set(DesignStatus._name_to_item)
+    assert len(STATUS_NAMES) == len(set(STATUS_NAMES)) == len(DesignStatus)
+    for code, name in enumerate(STATUS_NAMES):
+        assert DesignStatus[getattr(DesignStatus, name)]  # a member, with its meaning
+        assert int(jax.tree.leaves(getattr(DesignStatus, name))[0]) == code
     assert "not_a_minimum" in STATUS_NAMES
 
 

@@ -445,3 +445,24 @@ def test_implicit_derivatives_from_the_polished_jet_match_the_closed_form(fixed_
     for key, row in expected.items():
         for name, value in row.items():
             assert result.derivatives[key][name] == pytest.approx(value, rel=1e-9), (key, name)
+
+
+def test_the_solver_takes_its_thresholds_from_the_sqp_it_is_given():
+    """min (x - 0.5)^2 - (y - 0.5)^2 on [0, 1]^2 from (0.8, 0.5): the gradient has no y
+    part on the line y = 0.5, so the steps reach the saddle (0.5, 0.5) (curvature -2 along
+    y); the search leaves it along y and ends on a bound of y (f = -0.25, a minimum on the
+    box). With ``SQP(escapes=0)`` it may not leave, and the saddle is "not_a_minimum".
+    Thresholds that only the host reads for batches key no program of their own."""
+    problem = Problem(
+        lambda p: {"f": (p["x"] - 0.5) ** 2 - (p["y"] - 0.5) ** 2},
+        [Variable("x", 0.0, 1.0, start=0.8), Variable("y", 0.0, 1.0, start=0.5)],
+        objective=Objective("f", "min"),
+    )
+    left = solve(problem)
+    assert left.status == "successful"
+    assert left.parameters["x"] == pytest.approx(0.5, abs=1e-9)
+    assert min(left.parameters["y"], 1.0 - left.parameters["y"]) == pytest.approx(0.0, abs=1e-12)
+    assert solve(problem, solver=solver.SQP(escapes=0)).status == "not_a_minimum"
+    key = lambda sqp: solver._structure(problem, solver.settings_of(1e-10, 1e-13, 100, sqp))[0]  # noqa: E731
+    assert key(solver.SQP(point_seconds=0.0, chain=2)) == key(solver.SQP())
+    assert key(solver.SQP(escapes=0)) != key(solver.SQP())

@@ -17,10 +17,11 @@ import pytest
 from scipy.optimize import brentq
 
 from magdesign.cli import main
-from magdesign.design import Problem, Target, Variable, solve, sweep
+from magdesign.design import SQP, Problem, Target, Variable, solve, sweep
 from magdesign.design.spec import default_spec, load_spec, problem_from_spec
 
 solver = importlib.import_module("magdesign.design.solve")
+batch = importlib.import_module("magdesign.design._sqp.batch")  # where the points go a point at a time
 
 mm, mT = 1e-3, 1e-3
 
@@ -151,7 +152,7 @@ def test_a_sweep_of_a_few_points_moves_its_bar_per_point_with_the_answers_of_one
         def close(self):
             pass
 
-    monkeypatch.setattr(solver, "tqdm", Bar)
+    monkeypatch.setattr(batch, "tqdm", Bar)
     problem, _ = problem_from_spec(load_spec(cheap_spec))
     fields = np.linspace(3 * mT, 6 * mT, 15)
     few = sweep(problem, {"field_rest": fields}, progress=True)
@@ -194,12 +195,12 @@ def cubic_problem():
 
 @pytest.mark.skipif(jax.default_backend() != "cpu", reason="models with loops go a point at a time on a CPU only")
 def test_a_sweep_a_point_at_a_time_moves_its_bar_per_point_and_stops_soon_when_interrupted(monkeypatch):
-    """40 points a point at a time (runs of DESIGN_CHAIN on threads): the bar moves by one
+    """40 points a point at a time (runs of SQP.chain on threads): the bar moves by one
     point 40 times; Ctrl-C (a KeyboardInterrupt, here raised by the bar at its 3rd move)
     stops the sweep after the points the threads are solving (each made to take 0.1 s
     here), not after every point."""
-    monkeypatch.setattr(solver, "DESIGN_POINT_SECONDS", 0.0)
-    one_by_one = solver._one_by_one
+    sqp = SQP(point_seconds=0.0)
+    one_by_one = batch._one_by_one
 
     class Slow:
         def __init__(self, program):
@@ -210,7 +211,7 @@ def test_a_sweep_a_point_at_a_time_moves_its_bar_per_point_and_stops_soon_when_i
             solves.append(1)
             return self.program(*args)
 
-    monkeypatch.setattr(solver, "_one_by_one", lambda host, program, *rest: one_by_one(host, Slow(program), *rest))
+    monkeypatch.setattr(batch, "_one_by_one", lambda host, program, *rest: one_by_one(host, Slow(program), *rest))
     moves, interrupt_at, solves = [], [], []
 
     class Bar:
@@ -225,37 +226,37 @@ def test_a_sweep_a_point_at_a_time_moves_its_bar_per_point_and_stops_soon_when_i
         def close(self):
             pass
 
-    monkeypatch.setattr(solver, "tqdm", Bar)
+    monkeypatch.setattr(batch, "tqdm", Bar)
     targets = {"x": np.linspace(0.5, 2.0, 40)}
-    assert sweep(cubic_problem(), targets, progress=True).successful.all()
+    assert sweep(cubic_problem(), targets, progress=True, solver=sqp).successful.all()
     assert moves == [1] * 40
     moves.clear()
     solves.clear()
     interrupt_at.append(3)
     with pytest.raises(KeyboardInterrupt):
-        sweep(cubic_problem(), targets, progress=True)
-    # the threads stop after their current points: the last run of DESIGN_CHAIN points, which
+        sweep(cubic_problem(), targets, progress=True, solver=sqp)
+    # the threads stop after their current points: the last run of SQP.chain points, which
     # the threads reach a second or more after the interrupt, never starts
-    assert len(solves) <= 40 - solver.DESIGN_CHAIN
+    assert len(solves) <= 40 - sqp.chain
 
 
 @pytest.mark.skipif(jax.default_backend() != "cpu", reason="models with loops go a point at a time on a CPU only")
 @pytest.mark.parametrize("slow", [True, False])
 def test_a_model_with_loops_is_swept_a_point_at_a_time_where_a_point_is_slow(monkeypatch, slow):
     """Vmapped lanes of a loop wait for the slowest lane, so a model with loops of its own
-    whose point takes longer than DESIGN_POINT_SECONDS (here made 0 or infinite) is swept a
+    whose point takes longer than SQP.point_seconds (here made 0 or infinite) is swept a
     point per call of the program that solve runs, in runs of points each started from
     the optimum that the point before predicts to first order: each point is then its
     single solve from that start (the first from the variables' own start), or, without
     continuation, from its own start.
     Either way the optimum and its derivatives are the closed form's."""
     assert solver._iterative(cubic_problem()) and not solver._iterative(product_problem())
-    monkeypatch.setattr(solver, "DESIGN_POINT_SECONDS", 0.0 if slow else np.inf)
+    sqp = SQP(point_seconds=0.0 if slow else np.inf)
     calls = []
-    one_by_one = solver._one_by_one
-    monkeypatch.setattr(solver, "_one_by_one", lambda *args: calls.append(1) or one_by_one(*args))
+    one_by_one = batch._one_by_one
+    monkeypatch.setattr(batch, "_one_by_one", lambda *args: calls.append(1) or one_by_one(*args))
     targets, factors = np.linspace(0.5, 2.0, 4), np.array([1.0, 3.0])
-    result = sweep(cubic_problem(), {"x": targets, "a": factors})
+    result = sweep(cubic_problem(), {"x": targets, "a": factors}, solver=sqp)
     assert len(calls) == int(slow)
     assert result.shape == (4, 2) and result.successful.all()
     x, a = np.meshgrid(targets, factors, indexing="ij")
@@ -268,9 +269,9 @@ def test_a_model_with_loops_is_swept_a_point_at_a_time_where_a_point_is_slow(mon
         np.ravel(v) for v in (result.parameters["b"], result.derivatives["x"]["b"], result.derivatives["a"]["b"])
     )
     x, a, steps = x.ravel(), a.ravel(), result.steps.ravel()
-    each_cold = sweep(cubic_problem(), {"x": targets, "a": factors}, continuation=False)
+    each_cold = sweep(cubic_problem(), {"x": targets, "a": factors}, continuation=False, solver=sqp)
     cold_steps = []
-    for k in range(len(x)):  # the 8 points are one run (DESIGN_CHAIN)
+    for k in range(len(x)):  # the 8 points are one run (SQP.chain)
         problem = eqx.tree_at(
             lambda p: (p.targets[0].value, p.fixed_values[0]), cubic_problem(), (jnp.asarray(x[k]), jnp.asarray(a[k]))
         )
@@ -292,7 +293,7 @@ def test_a_model_with_loops_is_swept_a_point_at_a_time_where_a_point_is_slow(mon
 
 
 @pytest.mark.skipif(jax.default_backend() != "cpu", reason="models with loops go a point at a time on a CPU only")
-def test_a_point_that_fails_from_its_predicted_start_is_solved_again_from_its_own(monkeypatch):
+def test_a_point_that_fails_from_its_predicted_start_is_solved_again_from_its_own():
     """x^2 = y by Newton inside the model, NaN for x in (2.2, 2.8): from x = 1 (y = 1,
     dx/dy = 1/2) the prediction for y = 4 is x = 2.5, where the model is NaN; the point is
     solved again from its own start, x = 1, and reaches x = 2."""
@@ -305,9 +306,8 @@ def test_a_point_that_fails_from_its_predicted_start_is_solved_again_from_its_ow
         return {"y": jnp.where((x > 2.2) & (x < 2.8), jnp.nan, root**2)}
 
     problem = Problem(model, [Variable("x", 0.1, 3.0, start=1.0)], targets=[Target("y", 1.0)])
-    monkeypatch.setattr(solver, "DESIGN_POINT_SECONDS", 0.0)
     assert solve(problem, start={"x": 2.5}).status == "nonfinite"
-    result = sweep(problem, {"y": [1.0, 4.0]})
+    result = sweep(problem, {"y": [1.0, 4.0]}, solver=SQP(point_seconds=0.0))
     assert list(result.status) == ["successful", "successful"]
     np.testing.assert_allclose(result.parameters["x"], [1.0, 2.0], rtol=1e-12)
 
