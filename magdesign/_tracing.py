@@ -52,24 +52,27 @@ _COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_disable_hlo_pass
 
 @functools.cache
 def compiler_options():
-    """The XLA options that the design solver's programs compile with: _COMPILER_OPTIONS where
-    this jaxlib knows them, else none. Asked lazily, when a program is first compiled:
-    the probe starts JAX's backend, which must wait for the user's device settings."""
-    try:
-        jax.jit(lambda x: x + 1.0, compiler_options=_COMPILER_OPTIONS).lower(1.0).compile()
-    except Exception as error:
-        if "No such compile option" not in str(error):  # an older jaxlib's answer
-            raise
-        return {}
-    return dict(_COMPILER_OPTIONS)
+    """The XLA options that the design solver's programs compile with: those of
+    _COMPILER_OPTIONS that this jaxlib knows, each probed alone (a jaxlib may know the pass
+    list but not the fusion-emitter switch). Asked lazily, when a program is first
+    compiled: the probe starts JAX's backend, which must wait for the user's device settings."""
+    known = {}
+    for name, value in _COMPILER_OPTIONS.items():
+        try:
+            jax.jit(lambda x: x + 1.0, compiler_options={name: value}).lower(1.0).compile()
+        except Exception as error:
+            if "No such compile option" not in str(error):  # another jaxlib's answer
+                raise
+            continue
+        known[name] = value
+    return known
 
 
 @contextlib.contextmanager
 def gc_paused():
     """Python's cyclic garbage collector off for the block, then as it was. Tracing a
     program makes millions of short-lived objects, and the collections they set off
-    walk the whole heap: 0.22 s of the default design's 3.8 s first call (measured with
-    gc.callbacks, 2-core development machine). Nothing that the block frees is lost:
+    walk the whole heap, several per cent of a first call. Nothing that the block frees is lost:
     what it leaves in cycles is collected after it."""
     enabled = gc.isenabled()
     gc.disable()
