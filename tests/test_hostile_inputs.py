@@ -283,3 +283,34 @@ def test_a_violated_limit_says_so(tmp_path, capsys):
         broken = any(f"{name}.{side}" in result["violated"] for side in ("upper", "lower"))
         assert (rows[name] == "VIOLATED") == broken, name
     assert f"(not met: {', '.join(result['violated'])})" in table
+
+
+# --- every solid part: sensors outside, bodies apart, the magnet on its layer ---
+
+GMR = (EXAMPLES / "gmr_inductor.toml").read_text()
+POLE = (EXAMPLES / "pole_plate.toml").read_text()
+
+
+@pytest.mark.parametrize(
+    "text, replacements, fragments",
+    [
+        # a rod beside the ball's centre, 4 mm up: it spans -1 to 9 mm and runs through the ball
+        (SOFT_SCENE + ROD.format(y="10 mm").replace('"0 mm"]\n', '"4 mm"]\n'), [], ("soft[1]", "overlaps soft[0]")),
+        # the chip at the origin inside a 1 mm ball of iron
+        (SOFT_SCENE, [('position = ["0 mm", "10 mm", "0 mm"]', 'position = ["0 mm", "0 mm", "0 mm"]')], ("sensor:",)),
+        # the first inductor moved into the 1 mm magnet, whose faces are 15 and 16 mm above the substrate
+        (GMR, [('[["9 mm", "9 mm", "-1 mm"]', '[["0 mm", "0 mm", "15.5 mm"]')], ("inductors.positions", "the magnet")),
+        # the magnet moved 16 mm down by its offset, into the board under the layer
+        (
+            GMR,
+            [('remanence = "1.2 T"', 'remanence = "1.2 T"\noffset = ["0 mm", "0 mm", "-16 mm"]')],
+            ("magnet.offset",),
+        ),
+        # the magnet moved 10 mm up, off its 15 mm layer
+        (GMR, [('remanence = "1.2 T"', 'remanence = "1.2 T"\noffset = ["0 mm", "0 mm", "10 mm"]')], ("magnet.offset",)),
+        # the GMR 1 mm above the plate, 0.5 mm off the axis: inside the 2 mm ball whose bottom is 0.4 mm up
+        (POLE, [('height = "0.1 mm"', 'height = "1 mm"')], ("sensor.height", "the ball")),
+    ],
+)
+def test_sensors_outside_and_bodies_apart(tmp_path, capsys, text, replacements, fragments):
+    _refused(capsys, ["simulate", _spec(tmp_path, text, *replacements)], *fragments)

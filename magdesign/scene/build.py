@@ -30,7 +30,8 @@ from magdesign.scene.loads import loads_from_spec
 from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadout
 from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
-from magdesign.scene.pose import Magnet, SoftPart, grid_positions
+from magdesign.scene.pose import Magnet, SoftPart, grid_positions, rotation
+from magdesign.scene.solids import Solid, check_apart, solid
 from magdesign.spec.keys import KEYS, fields
 from magdesign.spec.sizes import check_fits
 from magdesign.units import SpecError, echo, uT
@@ -77,23 +78,29 @@ def check_wall(thickness, outer_radius, key="mechanics.thickness"):
 CONTACT_RTOL = 1e-9
 
 
-def check_carried(gap, height, mechanics):
-    """SpecError naming geometry.gap unless the magnet (near face ``gap`` (m) above the
-    sensor plane, ``height`` (m) tall) touches the part that carries it (to
-    :data:`CONTACT_RTOL`): on or in a layer (gap <= its thickness), or at a dome's apex (its
-    near face at or below the outer apex, its far face at or above the inner apex)."""
+def check_carried(gap, height, mechanics, key="geometry.gap"):
+    """SpecError naming ``key`` (geometry.gap, or magnet.offset where it moves the magnet up
+    or down) unless the magnet (near face ``gap`` (m) above the sensor plane, ``height`` (m)
+    tall) touches the part that carries it (to :data:`CONTACT_RTOL`): on or in a layer
+    (0 <= gap <= its thickness: not below the board the layer lies on), or at a dome's apex
+    (its near face at or below the outer apex, its far face at or above the inner apex)."""
     top, bottom = float(mechanics.top()), float(mechanics.bottom())  # the guards' embed and reach
+    if isinstance(mechanics, Layer) and gap < -top * CONTACT_RTOL:
+        raise SpecError(
+            f"{key}: a magnet whose face is {gap * 1e3:g} mm from the sensor plane lies below it, in the board "
+            "that the layer lies on; expected the magnet on or in the layer (its face 0 mm or more above the chips)"
+        )
     if isinstance(mechanics, Layer):
         if gap > top * (1.0 + CONTACT_RTOL):
             raise SpecError(
-                f"geometry.gap: a magnet whose face is {gap * 1e3:g} mm above the chips floats above the "
+                f"{key}: a magnet whose face is {gap * 1e3:g} mm above the chips floats above the "
                 f"{top * 1e3:g} mm layer that carries it (mechanics.thickness); expected a gap at most the "
                 "layer's thickness (the magnet on or in the layer)"
             )
     if isinstance(mechanics, Dome):
         if not (bottom * (1.0 - CONTACT_RTOL) <= gap + height and gap <= top * (1.0 + CONTACT_RTOL)):
             raise SpecError(
-                f"geometry.gap: a {height * 1e3:g} mm magnet whose face is {gap * 1e3:g} mm above the chips "
+                f"{key}: a {height * 1e3:g} mm magnet whose face is {gap * 1e3:g} mm above the chips "
                 f"misses the apex of the dome that carries it (its wall spans {bottom * 1e3:g} to "
                 f"{top * 1e3:g} mm); expected a gap from {(bottom - height) * 1e3:g} to {top * 1e3:g} mm"
             )
@@ -109,35 +116,18 @@ def check_magnet_fits(radius, outer_radius, key="magnet.radius"):
         )
 
 
-def check_solids(positions, magnet, parts, magnet_angles=None):
-    """SpecError unless the sensors lie outside the magnet and the magnet and soft parts lie
-    apart. ``positions`` (S, 3) sensor points (m); ``magnet`` (centre (3,), radius, height)
-    (m); ``parts`` [(key, centre (3,), inscribed radius)] of the [[soft]] parts. A body is
-    judged by the ball inside it (a rotated magnet's and every soft part's), so a refusal
-    is never wrong: two bodies whose balls overlap overlap."""
-    centre, radius, height = np.asarray(magnet[0], float), float(magnet[1]), float(magnet[2])
-    relative = np.asarray(positions, float) - centre
-    if magnet_angles is None:  # the axial cylinder itself
-        inside = (np.hypot(relative[:, 0], relative[:, 1]) < radius) & (np.abs(relative[:, 2]) < height / 2)
-    else:
-        inside = np.linalg.norm(relative, axis=1) < min(radius, height / 2)
-    if np.any(inside):
-        point = np.asarray(positions)[np.argmax(inside)] * 1e3
-        raise SpecError(
-            f"sensor.positions: the sensor at [{point[0]:g}, {point[1]:g}, {point[2]:g}] mm lies inside the magnet "
-            f"(magnet.radius = {radius * 1e3:g} mm, magnet.height = {height * 1e3:g} mm, centre "
-            f"{centre[2] * 1e3:g} mm above the chips: geometry.gap + height / 2); expected every sensor outside it"
-        )
-    balls = [("the magnet", centre, min(radius, height / 2))]
-    balls += [(key, np.asarray(c, float), float(r)) for key, c, r in parts]
-    for i, (a, centre_a, radius_a) in enumerate(balls):
-        for b, centre_b, radius_b in balls[i + 1 :]:
-            if np.linalg.norm(centre_a - centre_b) < radius_a + radius_b:
-                raise SpecError(
-                    f"{b}: it overlaps {a} (centres {np.linalg.norm(centre_a - centre_b) * 1e3:g} mm apart, "
-                    f"closer than the {radius_a * 1e3:g} mm and {radius_b * 1e3:g} mm that each reaches in every "
-                    "direction); expected solid parts apart"
-                )
+def _cylinder_solid(key, centre, radius, height, angles=None) -> Solid:
+    """A cylinder magnet as a :class:`Solid`; ``angles`` (rad) its rotation, None: axis along z."""
+    radius, height = float(radius), float(height)
+    turn = None if angles is None else np.asarray(rotation(angles)).T
+    return solid(key, "cylinder", np.asarray(centre, float), [radius, radius, height / 2], turn)
+
+
+def _soft_solid(key, part) -> Solid:
+    """A [[soft]] part at rest as a :class:`Solid` (its size: diameters, heights, sides)."""
+    size = [float(v) / 2 for v in part.size]
+    half = {"sphere": size * 3, "cylinder": [size[0], size[0], size[-1]], "cuboid": size}[part.shape]
+    return solid(key, part.shape, np.asarray(part.centre, float), half, np.asarray(rotation(part.angles)).T)
 
 
 def _mechanics(spec, fidelity, models=("dome", "layer")):
@@ -374,6 +364,7 @@ def _cylinder_scene(spec, fidelity):
         )
     mechanics = _mechanics(spec, fidelity)
     sensor = Table(spec, "sensor")
+    sensor_key = next((f"sensor.{key}" for key in ("positions", "grid") if sensor.has(key)), "sensor")
     model = sensor.choice("model", ("hall3d", "spin_valve", "gmr"))
     if model == "hall3d":
         transducer = _hall(sensor)
@@ -405,19 +396,17 @@ def _cylinder_scene(spec, fidelity):
     geometry = Table(spec, "geometry")
     gap = geometry.quantity("gap", "m")
     geometry.done()
-    check_carried(gap, height, mechanics)
+    lift = 0.0 if offset is None else float(offset[2])
+    check_carried(gap + lift, height, mechanics, key="magnet.offset" if lift else "geometry.gap")
     if isinstance(mechanics, Dome):
         check_magnet_fits(radius, float(mechanics.outer_radius))
     magnet_centre = np.array([0.0, 0.0, gap + height / 2]) + (0.0 if offset is None else np.asarray(offset))
-    check_solids(
-        positions,
-        (magnet_centre, radius, height),
-        [
-            (f"soft[{i}]", np.asarray(part.centre, float), min(map(float, part.size)) / 2)
-            for i, part in enumerate(parts)
-        ],
-        magnet_angles,
-    )
+    solids = [_cylinder_solid("magnet", magnet_centre, radius, height, magnet_angles)]
+    solids += [
+        _cylinder_solid(f"magnet.extra[{i}]", m.centre, m.radius, m.height, m.angles) for i, m in enumerate(extra)
+    ]
+    solids += [_soft_solid(f"soft[{i}]", part) for i, part in enumerate(parts)]
+    sensors = [(sensor_key, positions)]
     inductors = None
     if "inductors" in spec:
         table = Table(spec, "inductors")
@@ -430,6 +419,8 @@ def _cylinder_scene(spec, fidelity):
             window=table.integer("window", default=20, minimum=2),
         )
         table.done()
+        sensors.append(("inductors.positions", inductors.positions))
+    check_apart(sensors, solids)
     return MagnetScene(
         radius=jnp.asarray(radius),
         height=jnp.asarray(height),
@@ -529,6 +520,13 @@ def _pole_scene(spec, fidelity):
     offset = sensor.quantity("offset", "m")
     sensor_height = sensor.quantity("height", "m")
     sensor.done()
+    check_apart(
+        [("sensor.height", [offset, 0.0, sensor_height])],
+        [
+            _cylinder_solid("magnet", [0.0, 0.0, -height / 2], radius, height),
+            solid("pole.ball_radius", "sphere", [0.0, 0.0, gap + ball_radius], [ball_radius] * 3),
+        ],
+    )
     return PoleScene(
         plate_radius=jnp.asarray(radius),
         plate_thickness=jnp.asarray(height),
