@@ -199,6 +199,20 @@ def _check_spread(name, nominal, width, distribution, where):
         )
 
 
+def _check_spreads_at(tp, scene):
+    """:func:`_check_spread` of every toleranced scene parameter at ``scene``'s values: a
+    solve moves the design variables from the spec's start, and a spread checked there
+    can leave the domain about the solved value (a wall solved thinner than its absolute
+    tolerance)."""
+    known = parameters(scene)
+    for tolerance in tp.inputs:
+        if tolerance.name in known:
+            nominal = float(known[tolerance.name])
+            width = float(tolerance.size) * (abs(nominal) if tolerance.relative else 1.0)
+            where = f"design.tolerances.{tolerance.name} (about the design's {tolerance.name} = {nominal:g})"
+            _check_spread(tolerance.name, nominal, width, tolerance.distribution, where)
+
+
 def _with_effect(scene, name, spec):
     """The scene with the effect input ``name`` moves, added at zero where it is not listed."""
     cls, field, _, _ = EFFECT_INPUTS[name]
@@ -520,6 +534,7 @@ def monte_carlo(
     problem = tp.problem
     names = problem.outputs
     scene = tp.at(values)
+    _check_spreads_at(tp, scene)
     began = time.perf_counter()
     nominal, parts = _first_order(tp, scene)
     chunks = -(-samples // chunk)

@@ -205,3 +205,14 @@ def test_command_json_and_picture(tmp_path, capsys, nominal):
     assert robust["monte_carlo"]["yield"] >= document["yield"]
     assert robust["parameters"]["geometry.gap"] > document["design"]["parameters"]["geometry.gap"]
     assert picture.stat().st_size > 10_000
+
+
+def test_a_spread_is_checked_again_about_the_solved_design():
+    """An absolute 1 mm spread on the wall passes about the spec's start (a 3.5 mm wall)
+    but not about a design whose wall is 2.14 mm: 3 standard deviations reach below zero,
+    refused before any sample is drawn."""
+    spec = spec_with({"mechanics.thickness": "1 mm"})
+    spec["mechanics"]["thickness"] = "3.5 mm"
+    tp = tolerance_problem_from_spec(spec)
+    with pytest.raises(SpecError, match=r"design.tolerances.mechanics.thickness \(about the design's"):
+        monte_carlo(tp, POINT, samples=10)
