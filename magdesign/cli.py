@@ -304,6 +304,10 @@ def run_solve(args):
     spec = load_spec(args.spec) if args.spec else default_spec()
     auto = args.fidelity in (None, "auto")
     problem, _ = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
+    if "tolerances" in spec.get("design", {}):  # read by the tolerance command: one rule for both
+        with warnings.catch_warnings():  # the spec's warnings are said once, above
+            warnings.simplefilter("ignore")
+            tolerance_analysis.tolerance_problem_from_spec(spec, fidelity=None if auto else args.fidelity)
     levels = _levels_at(spec, None if auto else args.fidelity)
     stage(f"solving at {levels} ({FIRST_CALL})")
     first = solve_problem(problem)

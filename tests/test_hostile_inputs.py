@@ -257,6 +257,12 @@ def test_a_tolerance_whose_draws_leave_the_domain_is_refused(tmp_path, entry, re
         tolerance_problem_from_spec(spec)
 
 
+def test_solve_refuses_a_tolerance_that_the_tolerance_command_refuses(tmp_path, capsys):
+    path = _spec(tmp_path, TOLERANCES, ('"magnet.remanence" = "2 %"', '"magnet.remanence" = "500 %"'))
+    for argv in (["solve", path, "--fidelity", "reissner"], ["tolerance", path, "--samples", "10"]):
+        _refused(capsys, argv, "design.tolerances.magnet.remanence", "physical domain")
+
+
 # --- the report names exactly the rows it breaks ---
 
 
