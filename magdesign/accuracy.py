@@ -49,6 +49,7 @@ import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
 
+from magdesign._files import replaced
 from magdesign._progress import say, stage
 from magdesign.design import solve
 from magdesign.design.spec import default_spec, problem_from_spec
@@ -432,4 +433,5 @@ def plot(rows, path):
     axes[0].set_title("model levels against the most exact level")
     axes[1].set_title("default design against the axisymmetric dome")
     figure.tight_layout()
-    figure.savefig(path, dpi=110)
+    with replaced(path) as temporary:
+        figure.savefig(temporary, dpi=110)

@@ -35,8 +35,10 @@ def test_the_subpackages_load_after_a_plain_import():
         (lambda p: (p["x"],), r"model: the model must return a dict of scalar outputs .*got a tuple"),
         (lambda p: 2.0 * p["x"], r"model: the model must return a dict of scalar outputs .*got an array of shape \(\)"),
         (lambda p: {"field": p["x"]}, r"compliance: not an output of the model \(outputs: \['field'\]\)"),
+        (lambda p: {"compliance": "a"}, r"compliance: the model must return real scalar outputs .*is a str"),
+        (lambda p: {"compliance": p["x"] * 1j}, r"compliance: .*real scalar outputs .*is of dtype complex128"),
     ],
-    ids=["vector output", "tuple", "bare array", "missing output"],
+    ids=["vector output", "tuple", "bare array", "missing output", "string", "complex"],
 )
 def test_a_model_that_does_not_return_a_dict_of_scalars_is_named(model, message):
     problem = Problem(model, [Variable("x", 0.0, 1.0)], targets=[Target("compliance", 0.5)])

@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
 
+from magdesign._files import replaced
 from magdesign._numerics import ROUNDING_SPREAD
 from magdesign._progress import stage
 from magdesign.scene import MECHANICS_CONVERGED
@@ -51,7 +52,8 @@ def plot_design(problem, result, path):
     axes[0, 0].legend(fontsize=8)
     figure.suptitle(f"magdesign solve: {result.status}")
     figure.tight_layout()
-    figure.savefig(path, dpi=110)
+    with replaced(path) as temporary:
+        figure.savefig(temporary, dpi=110)
 
 
 def _label(name, unit):
@@ -150,4 +152,5 @@ def plot_sweep(result, path):
         axis.set_visible(False)
     figure.suptitle(f"magdesign sweep: {result.summary()}", fontsize=10)
     figure.tight_layout()
-    figure.savefig(path, dpi=90)
+    with replaced(path) as temporary:
+        figure.savefig(temporary, dpi=90)

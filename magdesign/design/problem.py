@@ -234,7 +234,11 @@ def check_outputs(problem: Problem, outputs) -> None:
     if missing:
         raise ValueError(f"{missing[0]}: not an output of the model (outputs: {sorted(outputs)})")
     for name in problem.outputs:
-        shape = jnp.shape(outputs[name])
+        value = outputs[name]
+        if not (hasattr(value, "dtype") or isinstance(value, (int, float))) or jnp.iscomplexobj(value):
+            kind = f"of dtype {value.dtype}" if hasattr(value, "dtype") else f"a {type(value).__name__}"
+            raise ValueError(f"{name}: the model must return real scalar outputs (SI); {name!r} is {kind}")
+        shape = jnp.shape(value)
         if shape != ():
             raise ValueError(f"{name}: the model must return a dict of scalar outputs; {name!r} has shape {shape}")
 

@@ -6,6 +6,7 @@ from typing import NamedTuple
 import equinox as eqx
 import numpy as np
 
+from magdesign._files import replaced
 from magdesign.design.problem import per_problem, source_of
 from magdesign.design.status import STATUS_NAMES as STATUS_NAMES
 from magdesign.design.status import DesignStatus as DesignStatus
@@ -380,7 +381,7 @@ class DesignSweep(eqx.Module):
         """Write :meth:`columns` to a CSV file (a header row, then one row per point, SI),
         ``block`` rows at a time so that a sweep of millions of points needs little memory."""
         columns = self.columns()
-        with open(path, "w", newline="") as file:
+        with replaced(path) as temporary, open(temporary, "w", newline="") as file:
             writer = csv.writer(file)
             writer.writerow(columns)
             for start in range(0, self.status.size, block):

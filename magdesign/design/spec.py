@@ -33,7 +33,6 @@ import itertools
 import math
 import os
 import re
-import secrets
 import tomllib
 import warnings
 from collections.abc import Mapping
@@ -45,6 +44,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
+from magdesign._files import replaced
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable, remember_source
 from magdesign.design.sweep import sweepable
 from magdesign.scene import (
@@ -181,17 +181,10 @@ def write_spec(path, spec: dict, *, status: str) -> None:
         f"# the answer stands in the scene's tables{f' ({levels})' if levels else ''}: simulate or show this file\n\n"
         + spec_text(spec)
     )
-    temporary = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-    try:
-        with open(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), "w", encoding="utf-8") as file:
-            file.write(text)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)
-        raise
+    with replaced(path) as temporary, open(temporary, "w", encoding="utf-8") as file:
+        file.write(text)
+        file.flush()
+        os.fsync(file.fileno())
 
 
 _STEP = re.compile(r"(\w+)((?:\[\d+\])*)")

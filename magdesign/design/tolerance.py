@@ -49,6 +49,7 @@ from jaxtyping import Array, Float, PRNGKeyArray
 from matplotlib.figure import Figure
 from tqdm import tqdm
 
+from magdesign._files import replaced
 from magdesign._numerics import ROUNDING_SPREAD, TINY
 from magdesign.design.problem import Limit, Problem
 from magdesign.design.report import DesignResult, format_quantity
@@ -842,4 +843,5 @@ def plot_tolerance(result: ToleranceResult, path, *, robust: ToleranceResult | N
     if quiet:
         figure.text(0.01, 0.005, f"not drawn (no sample near its bounds): {', '.join(quiet)}", fontsize=7)
     figure.tight_layout(rect=(0, 0.03 if quiet else 0, 1, 1))
-    figure.savefig(path, dpi=90)
+    with replaced(path) as temporary:
+        figure.savefig(temporary, dpi=90)

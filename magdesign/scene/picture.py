@@ -13,6 +13,7 @@ from matplotlib.colors import LogNorm
 from matplotlib.figure import Figure
 from matplotlib.patches import Arc, Circle, Polygon, Rectangle
 
+from magdesign._files import replaced
 from magdesign.scene.film_scene import FilmScene
 from magdesign.scene.magnet_scene import MagnetScene
 from magdesign.scene.mechanics import Dome
@@ -189,5 +190,6 @@ def plot_scene(scene, loads, path, *, title=""):
     axes[0].legend(loc="upper left", fontsize=7, framealpha=0.8)
     figure.colorbar(mesh, ax=list(axes), label="|B| (T)", shrink=0.9)
     figure.suptitle(title or f"{type(scene).__name__}: field magnitude and field lines in the plane y = 0")
-    figure.savefig(path, dpi=110)
+    with replaced(path) as temporary:
+        figure.savefig(temporary, dpi=110)
     return figure
