@@ -10,16 +10,33 @@ Progress bars (tqdm) are separate: they show only on a terminal.
 import sys
 
 _prefix = None  # "magdesign solve" while the lines are on; None: off
+_swallowed = False  # a Ctrl-C that a callback caught and dropped
 
 
 def enable(prefix: str | None) -> None:
-    """Print stage lines as "PREFIX: message" from now on (None: print none)."""
-    global _prefix
-    _prefix = prefix
+    """Print stage lines as "PREFIX: message" from now on (None: print none); forget a
+    swallowed interrupt."""
+    global _prefix, _swallowed
+    _prefix, _swallowed = prefix, False
+
+
+def swallowed_interrupt() -> None:
+    """Note a Ctrl-C that a callback caught and dropped (Python reports an exception in a
+    garbage-collection callback or a __del__ and goes on): :func:`check_interrupt` raises
+    it again at the next stage or file."""
+    global _swallowed
+    _swallowed = True
+
+
+def check_interrupt() -> None:
+    """Raise KeyboardInterrupt where a Ctrl-C was swallowed (:func:`swallowed_interrupt`)."""
+    if _swallowed:
+        raise KeyboardInterrupt
 
 
 def stage(message: str) -> None:
     """One line on stderr saying what runs now ("magdesign sweep: solving 15 points ...")."""
+    check_interrupt()
     say(f"{message} ...")
 
 

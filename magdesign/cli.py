@@ -784,6 +784,7 @@ def main(argv=None):
     }[args.command]
     _progress.enable(None if args.quiet else f"magdesign {args.command}")
     stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
+    unraisable, sys.unraisablehook = sys.unraisablehook, _unraisable
     try:
         if getattr(args, "plot", None):
             check_output_path(args.plot)
@@ -792,6 +793,7 @@ def main(argv=None):
         if getattr(args, "write", None):
             check_output_path(args.write, "--write", ".toml")
         code = command(args)
+        _progress.check_interrupt()
         sys.stdout.flush()  # a full or closed stdout fails here, not in Python's flush at exit
         return code
     except SpecError as error:
@@ -818,7 +820,17 @@ def main(argv=None):
         )
     finally:
         _progress.enable(None)
-        sys.stdout = stdout
+        sys.stdout, sys.unraisablehook = stdout, unraisable
+
+
+def _unraisable(report):
+    """sys.unraisablehook during a command: a Ctrl-C that lands in a callback Python cannot
+    raise from (JAX's garbage-collection callback) is noted, not printed, and raised again
+    at the next stage line, file or the command's end; anything else is reported as usual."""
+    if issubclass(report.exc_type, KeyboardInterrupt):
+        _progress.swallowed_interrupt()
+    else:
+        sys.__unraisablehook__(report)
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ import pytest
 
 import magdesign.cli as cli
 from magdesign import _progress
+from magdesign._files import replaced
 from magdesign.cli import main
 
 EXAMPLES = Path(__file__).parents[1] / "examples"
@@ -193,4 +194,27 @@ def test_ctrl_c_during_a_solve_is_one_line_and_exit_130_and_writes_nothing(tmp_p
     captured = capsys.readouterr()
     assert captured.err.splitlines()[-1] == "magdesign solve: interrupted"
     assert json.loads(captured.out) == {"error": "interrupted", "message": "interrupted", "exit_code": 130}
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_ctrl_c_that_a_callback_swallowed_still_stops_the_command(tmp_path, capsys, monkeypatch):
+    """A Ctrl-C that lands in a callback Python cannot raise from (JAX's garbage-collection
+    callback; here a __del__) is reported nowhere by Python and the run goes on: the
+    command notes it, writes no file and ends with exit 130 and one line."""
+
+    class Dropped:
+        def __del__(self):
+            raise KeyboardInterrupt
+
+    def show(args):
+        Dropped()  # its __del__'s KeyboardInterrupt goes to sys.unraisablehook
+        with replaced(args.plot) as temporary:
+            temporary.write_text("picture")
+        return 0
+
+    monkeypatch.setattr(cli, "run_show", show)
+    picture = tmp_path / "sensor.png"
+    assert main(["show", str(EXAMPLES / "dome_hall.toml"), "--plot", str(picture)]) == 130
+    err = capsys.readouterr().err
+    assert err.splitlines()[-1] == "magdesign show: interrupted" and "Traceback" not in err
     assert list(tmp_path.iterdir()) == []
