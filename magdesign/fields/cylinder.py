@@ -802,8 +802,8 @@ def cylinder_axial(
             sensor a gap g above the top face is at z = g + D/2. Inside and outside.
         radius: R (m), > 0.
         height: D (m), > 0.
-        polarization: J = mu0 M (T): the remanence Br for a permanent magnet.
-        ``radius``, ``height`` and ``polarization`` broadcast with ``z``.
+        polarization: J = mu0 M (T): the remanence Br for a permanent magnet. ``radius``,
+            ``height`` and ``polarization`` broadcast with ``z``.
 
     Returns:
         B_z (T), shape of the arguments broadcast together (see docs/models.md,
