@@ -439,6 +439,7 @@ def _command(spec, *extra):
     ]
 
 
+@pytest.mark.slow
 def test_two_host_devices_and_two_processes_give_the_one_device_answer(cheap_spec):
     one = json.loads(subprocess.run(_command(cheap_spec), capture_output=True, text=True, check=True).stdout)
     two = json.loads(

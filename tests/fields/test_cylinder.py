@@ -297,6 +297,7 @@ def _in_small_calls(f, *arrays, size=143):
     return np.concatenate([np.asarray(f(*(a[i : i + size] for a in arrays))) for i in range(0, len(arrays[0]), size)])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("aspect", [1e-3, 2 / 3, 10.0])
 def test_a_large_call_evaluates_each_point_in_its_own_zone(aspect, monkeypatch):
     """A call of at least 2 PARTITION_CHUNK points runs the far series at every point and

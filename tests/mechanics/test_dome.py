@@ -193,6 +193,7 @@ def test_axisymmetric_gradients_equal_central_differences():
         assert float(g) == pytest.approx(_central_difference(compliance, args, i), rel=1e-5)
 
 
+@pytest.mark.slow
 def test_axisymmetric_second_derivatives_equal_differences_of_the_first():
     # forward over forward, as the design solver's Hessians take it: the implicit JVP
     # differentiated once more, in the thickness and the radius (mixed: a sweep over the
@@ -210,6 +211,7 @@ def test_axisymmetric_second_derivatives_equal_differences_of_the_first():
             assert second[j, i] == pytest.approx(difference, rel=1e-5)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("control", ["force", "travel"])
 def test_axisymmetric_second_derivatives_in_the_held_value_equal_differences_of_the_first(control):
     # the held force (dome_compliance) or travel (dome_curve) and the thickness, mixed:

@@ -146,6 +146,7 @@ def test_moments_coenergy_gradient_is_the_kelvin_force_and_torque():
     np.testing.assert_allclose(float(eqx.filter_jit(lambda s: s.attraction())(scene)), -fz, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_moments_outputs_restore_and_their_differences_hold():
     """The spring coefficient and the field sensitivity (five-point differences of W' and
     of the chain's field) against central differences of the exact force and of the GMR's

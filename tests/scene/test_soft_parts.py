@@ -168,6 +168,7 @@ def test_a_saturating_part_gives_less_than_the_linear_one():
     assert abs(strong / linear - 1) < 1e-6
 
 
+@pytest.mark.slow
 def test_a_design_places_a_soft_back_plate():
     """The plate's depth as a design variable (soft[0].position[2], read in m): the solve
     reaches a wanted rest field that lies between the far and the near plate's, and the
