@@ -200,18 +200,19 @@ def _check_spread(name, nominal, width, distribution, where):
         )
 
 
-def _check_spreads_at(tp, scene):
-    """:func:`_check_spread` of every toleranced scene parameter at ``scene``'s values: a
-    solve moves the design variables from the spec's start, and a spread checked there
-    can leave the domain about the solved value (a wall solved thinner than its absolute
-    tolerance)."""
+def _check_spreads(inputs, scene, where=None):
+    """:func:`_check_spread` of every toleranced scene parameter among ``inputs`` at
+    ``scene``'s values, naming ``where`` (default: the key, about the scene's value). Run
+    at load and again before a Monte Carlo: a solve moves the design variables from the
+    spec's start, and a spread that fits about the start can leave the domain about the
+    solved value (a wall solved thinner than its absolute tolerance)."""
     known = parameters(scene)
-    for tolerance in tp.inputs:
+    for tolerance in inputs:
         if tolerance.name in known:
             nominal = float(known[tolerance.name])
             width = float(tolerance.size) * (abs(nominal) if tolerance.relative else 1.0)
-            where = f"design.tolerances.{tolerance.name} (about the design's {tolerance.name} = {nominal:g})"
-            _check_spread(tolerance.name, nominal, width, tolerance.distribution, where)
+            about = f"design.tolerances.{tolerance.name} (about the design's {tolerance.name} = {nominal:g})"
+            _check_spread(tolerance.name, nominal, width, tolerance.distribution, where or about)
 
 
 def _with_effect(scene, name, spec):
@@ -277,10 +278,8 @@ def tolerance_problem_from_spec(spec: dict, *, fidelity: str | None = None) -> T
             )
         size, relative = _size(entry, unit, where, per_axis)
         shown = entry if isinstance(entry, str) else echo(entry)
-        if name in known:
-            nominal = float(known[name])
-            _check_spread(name, nominal, float(size) * abs(nominal) if relative else float(size), distribution, where)
         inputs.append(Tolerance(name, jnp.asarray(size), relative, distribution, shown))
+        _check_spreads(inputs[-1:], scene, where)
 
     target_tolerances = []
     for target in problem.targets:
@@ -535,7 +534,7 @@ def monte_carlo(
     problem = tp.problem
     names = problem.outputs
     scene = tp.at(values)
-    _check_spreads_at(tp, scene)
+    _check_spreads(tp.inputs, scene)
     began = time.perf_counter()
     nominal, parts = _first_order(tp, scene)
     chunks = -(-samples // chunk)

@@ -85,12 +85,13 @@ def check_carried(gap, height, mechanics, key="geometry.gap"):
     (0 <= gap <= its thickness: not below the board the layer lies on), or at a dome's apex
     (its near face at or below the outer apex, its far face at or above the inner apex)."""
     top, bottom = float(mechanics.top()), float(mechanics.bottom())  # the guards' embed and reach
-    if isinstance(mechanics, Layer) and gap < -top * CONTACT_RTOL:
-        raise SpecError(
-            f"{key}: a magnet whose face is {gap * 1e3:g} mm from the sensor plane lies below it, in the board "
-            "that the layer lies on; expected the magnet on or in the layer (its face 0 mm or more above the chips)"
-        )
     if isinstance(mechanics, Layer):
+        if gap < -top * CONTACT_RTOL:
+            raise SpecError(
+                f"{key}: a magnet whose face is {gap * 1e3:g} mm from the sensor plane lies below it, in the board "
+                "that the layer lies on; expected the magnet on or in the layer (its face 0 mm or more above the "
+                "chips)"
+            )
         if gap > top * (1.0 + CONTACT_RTOL):
             raise SpecError(
                 f"{key}: a magnet whose face is {gap * 1e3:g} mm above the chips floats above the "
