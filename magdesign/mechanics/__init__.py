@@ -18,6 +18,7 @@ from magdesign.mechanics.skin_layer import HertzContact as HertzContact
 from magdesign.mechanics.skin_layer import SurfaceLoad as SurfaceLoad
 from magdesign.mechanics.skin_layer import hertz_contact as hertz_contact
 from magdesign.mechanics.skin_layer import layer_displacement as layer_displacement
+from magdesign.mechanics.skin_layer import thin_layer_contact as thin_layer_contact
 from magdesign.mechanics.viscoelastic import lag_filter as lag_filter
 from magdesign.mechanics.viscoelastic import lag_pole as lag_pole
 from magdesign.mechanics.viscoelastic import time_constant_from_pole as time_constant_from_pole

@@ -25,6 +25,7 @@ from magdesign.mechanics.skin_layer import (
     hertz_contact,
     layer_displacement,
     load_transform,
+    thin_layer_contact,
 )
 
 MU = 20e3  # Pa, a soft silicone
@@ -47,6 +48,9 @@ def test_bessel_functions_match_scipy():
     np.testing.assert_allclose([j1_x[0], j2_x2[0]], [0.5, 0.125], rtol=1e-15)
     ka = np.array([0.2, 3.0, 40.0])
     np.testing.assert_allclose(load_transform("hertz", ka), 3.0 * (np.sin(ka) - ka * np.cos(ka)) / ka**3, rtol=1e-13)
+    x = np.concatenate([np.linspace(0.01, 30.0, 300), np.geomspace(30.0, 3e3, 50)])
+    np.testing.assert_allclose(load_transform("thin", x), 48.0 * sp.jv(3, x) / x**3, atol=1e-13)
+    np.testing.assert_allclose(load_transform("thin", np.zeros(1)), 1.0, rtol=1e-15)
     ka = np.array([1e-3, 0.05, 0.099])  # where the difference above loses digits: its Taylor series
     taylor = 1.0 - ka**2 / 10.0 + ka**4 / 280.0 - ka**6 / 15120.0 + ka**8 / 1330560.0
     np.testing.assert_allclose(load_transform("hertz", ka), taylor, rtol=1e-14)
@@ -370,8 +374,9 @@ def test_derivatives_match_finite_differences():
 
 
 def test_hertz_contact_fits_the_sphere_on_a_thick_layer():
-    """Hertz's contact radius, checked through the displacement field: on a thick layer the
-    surface under the contact follows the sphere, u_z(r) = -(delta - r^2 / (2 R))."""
+    """Hertz's contact radius, checked through the displacement field: on a thick layer
+    (a / h = 0.01) the surface under the contact follows the sphere,
+    u_z(r) = -(delta - r^2 / (2 R)); the base takes about a / h off the depth."""
     h, R, fn = 0.1, 5e-3, 0.2
     layer = ElasticLayer(thickness=h, shear_modulus=MU, poisson_ratio=0.49)
     contact = hertz_contact(normal_force=fn, sphere_radius=R, layer=layer)
@@ -407,3 +412,23 @@ def test_far_points_and_quadrature_convergence():
     np.testing.assert_allclose(u[~edge], fine[~edge], atol=1e-5 * scale)
     np.testing.assert_allclose(u[edge], fine[edge], atol=1e-3 * scale)
     assert np.max(np.abs(u[-1])) < 1e-3 * scale  # 20 thicknesses away
+
+
+@pytest.mark.parametrize("h", [25e-6, 6.25e-6])
+def test_thin_layer_contact_fits_the_sphere(h):
+    """The thin-layer contact (derived from the lubrication limit) checked through the
+    transform solution: under the ``"thin"`` pressure the surface follows the sphere,
+    u_z(r) - u_z(0) = r^2 / (2 R) for r <= a / 2 (tolerance 2 (h / a)^2) and u_z(0) = -delta
+    (tolerance 20 (h / a)^2; computed 14 (h / a)^2). a / h = 21 and 42 here."""
+    R, fn = 5e-3, 0.5
+    layer = ElasticLayer(thickness=h, shear_modulus=MU, poisson_ratio=0.5)
+    contact = thin_layer_contact(normal_force=fn, sphere_radius=R, layer=layer)
+    a = contact.radius
+    assert a / h > 20
+    np.testing.assert_allclose(contact.peak_pressure * np.pi * a**2 / 3, fn, rtol=1e-14)  # int p dA = Fn
+    r = np.array([0.0, 0.25, 0.5]) * a
+    u = layer_displacement(jnp.stack([r, 0 * r, jnp.full(3, h)], -1), layer=layer, load=_load("thin", fn=fn, radius=a))
+    tol = (h / a) ** 2
+    np.testing.assert_allclose(u[1:, 2] - u[0, 2], r[1:] ** 2 / (2 * R), rtol=2 * tol)
+    np.testing.assert_allclose(-u[0, 2], contact.depth, rtol=20 * tol)
+    assert hertz_contact(normal_force=fn, sphere_radius=R, layer=layer).radius > 2 * a  # the layer is stiffer
