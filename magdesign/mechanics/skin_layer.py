@@ -176,15 +176,21 @@ def bessel_scaled(x: Float[ArrayLike, "..."]) -> tuple[Float[Array, "..."], Floa
     """(J0(x), J1(x) / x, J2(x) / x^2) for x >= 0, smooth (and with finite derivatives) at
     x = 0, where they are (1, 1/2, 1/8)."""
     x = jnp.asarray(x, dtype=float)
-    small = x < SERIES_LIMIT
-    u = jnp.where(small, x, 0.0) ** 2 / 4.0
+    return bessel_scaled_squared(x * x)
+
+
+def bessel_scaled_squared(
+    x2: Float[ArrayLike, "..."],
+) -> tuple[Float[Array, "..."], Float[Array, "..."], Float[Array, "..."]]:
+    """:func:`bessel_scaled` of x = sqrt(``x2``): even functions of x written in x^2, so their
+    derivatives in the coordinates stay finite on the load's axis (no sqrt at 0)."""
+    x2 = jnp.asarray(x2, dtype=float)
+    small = x2 < SERIES_LIMIT**2
+    u = jnp.where(small, x2, 0.0) / 4.0
     series = [jnp.polyval(jnp.asarray(_SERIES[n]), u) for n in (0, 1, 2)]
-
-    def large(t):
-        j0, j1 = _bessel_asymptotic(0, t), _bessel_asymptotic(1, t)
-        return j0, j1 / t, (2.0 * j1 / t - j0) / (t * t)
-
-    big = large(jnp.where(small, SERIES_LIMIT, x))
+    t = jnp.sqrt(jnp.where(small, SERIES_LIMIT**2, x2))
+    j0, j1 = _bessel_asymptotic(0, t), _bessel_asymptotic(1, t)
+    big = (j0, j1 / t, (2.0 * j1 / t - j0) / (t * t))
     return tuple(jnp.where(small, s, b) for s, b in zip(series, big))
 
 
@@ -320,7 +326,7 @@ def layer_displacement(
     dk = quadrature.weights / a
     U_L, W_L, U_z, W_z, V_T = _kernels(k, z, layer)
     L = load_transform(load.profile, k * a)  # per unit force
-    j0, j1_x, j2_x2 = bessel_scaled(k * jnp.sqrt(x * x + y * y))
+    j0, j1_x, j2_x2 = bessel_scaled_squared(k * k * (x * x + y * y))
     # (1 / 2 pi) int ... k dk with the load transform and the Hankel measure folded in
     measure = dk * k * L / (2.0 * jnp.pi)
 
