@@ -434,3 +434,18 @@ def test_thin_layer_contact_fits_the_sphere(h):
     np.testing.assert_allclose(u[1:, 2] - u[0, 2], r[1:] ** 2 / (2 * R), rtol=2 * tol)
     np.testing.assert_allclose(-u[0, 2], contact.depth, rtol=20 * tol)
     assert hertz_contact(normal_force=fn, sphere_radius=R, layer=layer).radius > 2 * a  # the layer is stiffer
+
+
+def test_construction_and_validation():
+    from magdesign.mechanics import LinearElastic
+
+    layer = ElasticLayer.from_material(thickness=2e-3, material=LinearElastic(E=83e3, nu=0.49))
+    np.testing.assert_allclose([layer.shear_modulus, layer.poisson_ratio], [83e3 / 2.98, 0.49], rtol=1e-15)
+    with pytest.raises(ValueError, match="poisson_ratio"):
+        ElasticLayer(thickness=2e-3, shear_modulus=MU, poisson_ratio=0.51)
+    with pytest.raises(ValueError, match="thickness"):
+        ElasticLayer(thickness=-1e-3, shear_modulus=MU, poisson_ratio=0.4)
+    with pytest.raises(ValueError, match="profile"):
+        _load("parabolic", fn=1.0)
+    with pytest.raises(ValueError, match="radius"):
+        _load("hertz", fn=1.0, radius=0.0)
