@@ -144,7 +144,7 @@ DOME_MIN_TRAVEL_FRACTION = 1e-3
 # is below this fraction of the potential's magnitude: there the potential's float64
 # rounding (measured up to 3e-11 relative, a thin wall's bending energy being a small
 # difference of rotations) hides the decrease, and a test on the potential would refuse
-# good steps (a t/R = 0.005 dome at a travel of 0.002 t stalled 20x above its tolerance).
+# good steps (a t/R = 0.005 dome at a travel of 0.002 t stalls 20x above its tolerance).
 # Near equilibrium Newton's step is exact to second order, so nothing is lost.
 DOME_ENERGY_RESOLUTION = 1e-9
 # First Levenberg shift (tried only when the tangent matrix is not positive definite,
@@ -161,7 +161,7 @@ FD_CALIBRATION_STEP = 1e-6
 # The magnetic-suspension pole's moments level: the tilt step (rad) of its five-point central differences (the
 # spring coefficient and the field sensitivity at theta = 0). Truncation ~ step^4 times a
 # fifth / sixth tilt derivative: the GMR's field, 0.58 mm from the rod's tip, varies
-# fastest; at 0.02 rad its sensitivity was 1.7e-4 off, at 0.005 rad below 1e-6 (against
+# fastest; at 0.02 rad its sensitivity is 1.7e-4 off, at 0.005 rad below 1e-6 (against
 # 0.0025 rad); rounding ~1e-15 / step^2 ~ 4e-11 for the spring coefficient.
 TILT_DIFFERENCE_STEP = 0.005
 # The five tilts (rad) of those central differences and their weights for the first and

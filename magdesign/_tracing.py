@@ -5,9 +5,11 @@ import functools
 import gc
 
 import equinox as eqx
-import equinox._errors as _equinox_errors
 import jax
+import jax.numpy as jnp
 from jax.extend.core import ClosedJaxpr, Jaxpr
+
+_errors = {"as_nan": False}  # set by errors_as_nan, read by checked when traced
 
 
 def traced_once(fn):
@@ -23,9 +25,9 @@ def traced_once(fn):
     (a design problem and its model, a mesh): ``jax.clear_caches()`` frees them. A
     global that the function reads is read once, when it is traced.
 
-    Two things that a trace depends on are part of the key: equinox's error mode, which
-    equinox's runtime checks read when traced (the design solver traces with errors as
-    NaN, a plain call with errors raised), and the abstract mesh. JAX's derivatives of
+    Two things that a trace depends on are part of the key: the error mode, which
+    :func:`checked` reads when traced (the design solver traces with errors as NaN, a
+    plain call with errors raised), and the abstract mesh. JAX's derivatives of
     loops run code under an empty abstract mesh and the rest under none: the same mesh,
     but different keys of the jit's trace cache, so each call names the mesh it is under.
     """
@@ -33,7 +35,7 @@ def traced_once(fn):
 
     @functools.wraps(fn)
     def call(*args, **kwargs):
-        error_mode = getattr(_equinox_errors, "EQX_ON_ERROR", None)
+        error_mode = _errors["as_nan"]
         with jax.sharding.use_abstract_mesh(jax.sharding.get_abstract_mesh()):
             return jitted(error_mode, args, kwargs)
 
@@ -105,27 +107,26 @@ def has_loops(fn, *args) -> bool:
 
 @contextlib.contextmanager
 def errors_as_nan():
-    """While the design solver's core is traced and lowered, equinox's runtime errors become
-    NaN: the linear solves of optimistix's implicit adjoint (lineax raises on a non-finite
-    answer), a soft part's saturation solve. The core reports NaN as a status
+    """While the block traces a program, :func:`checked` makes a failed check NaN instead
+    of an error. The design solver's core is traced so: it reports NaN as a status
     ("nonfinite") or as NaN derivatives, so it never raises; and a runtime error is a
     host callback, which keeps a program out of JAX's persistent compilation cache, so
-    that the command would compile the solver afresh on every run. equinox reads its
-    error mode (``EQX_ON_ERROR``) from the environment once, on import, and offers no
-    public switch for a block of code: this and :func:`traced_once` are the one place
-    that sets and reads two private names of equinox (0.13). Where they are missing,
-    errors stay errors and the cache misses, which tests/test_cli.py notices."""
-    names = ("EQX_ON_ERROR", "branched_error_if_impl_jit")
-    if not all(hasattr(_equinox_errors, name) for name in names):
-        yield
-        return
-    saved = [getattr(_equinox_errors, name) for name in names]
-    # the unjitted check reads EQX_ON_ERROR when traced; the jitted one would reuse a
-    # trace made outside this block
-    _equinox_errors.EQX_ON_ERROR = "nan"
-    _equinox_errors.branched_error_if_impl_jit = _equinox_errors.branched_error_if_impl
+    that the command would compile the solver afresh on every run. The checks of the
+    libraries that the core calls are off where it calls them (lineax and optimistix
+    with ``throw=False``, the implicit derivatives' own solve)."""
+    saved = _errors["as_nan"]
+    _errors["as_nan"] = True
     try:
         yield
     finally:
-        for name, value in zip(names, saved):
-            setattr(_equinox_errors, name, value)
+        _errors["as_nan"] = saved
+
+
+def checked(value, failed, message: str):
+    """``value`` where ``failed`` (a boolean array) is false; where it is true, an
+    equinox runtime error with ``message``, or, while :func:`errors_as_nan` traces,
+    ``value`` made NaN (the whole pytree, as the error would stop it whole)."""
+    if not _errors["as_nan"]:
+        return eqx.error_if(value, failed, message)
+    bad = jnp.any(failed)
+    return jax.tree.map(lambda leaf: jnp.where(bad, jnp.nan, leaf), value)

@@ -134,7 +134,7 @@ def test_every_example_simulates(example, capsys):
 
 def test_the_command_keeps_compiled_programs_in_its_cache_folder(tmp_path):
     """The solver's own program among them: JAX keeps no program that calls back to Python
-    (equinox's runtime errors do, as inside optimistix's implicit adjoint), and a cache
+    (a runtime error check does, as lineax's checks of a solve), and a cache
     without the solver would leave every run to compile it again. The programs lie in a
     folder named for the CPU (JAX's cache key leaves it out), and loading them says nothing."""
     cache = tmp_path / "cache"

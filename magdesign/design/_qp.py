@@ -126,8 +126,8 @@ def _interior_point(Q, q, A, b, G, h, needed, tol, max_iterations):
 
     def newton(w, s, z, r_dual, r_eq, r_ineq, r_comp):
         # The whole (unreduced) Newton system: eliminating ds and dz first would put z / s
-        # on the diagonal, which overflows near the end where slacks vanish (measured: NaN
-        # steps on hs010, hs071 and others).
+        # on the diagonal, which overflows near the end where slacks vanish (NaN steps on
+        # hs010 and hs071 of the Hock-Schittkowski tests).
         zeros = jnp.zeros
         matrix = jnp.block(
             [
@@ -206,8 +206,8 @@ def solve_qp(Q, q, A, b, G, h, *, guess=None, box=None, tol=1e-12, max_iteration
         w, y, z, ok = _solve_on_active_set(Q, q, A, b, G, h, rows, tol, box)
         # Next: the kept rows with a positive multiplier, and the dropped rows that are
         # violated. A dropped row's multiplier is zero only up to the solve's rounding
-        # (1e-10 beside the slacks' 1e6), and must not bring it back: where its row was
-        # parallel to a kept one (two limits on one quantity) the next solve was singular.
+        # (1e-10 beside the slacks' 1e6), and must not bring it back: where its row is
+        # parallel to a kept one (two limits on one quantity) the next solve is singular.
         violated = G @ w - h > tol * (1.0 + jnp.abs(h))
         rows = jnp.where(ok, rows, jnp.where(rows, z > 0.0, violated))
         return rows, w, y, z, ok, k + 1

@@ -89,8 +89,8 @@ def _binomial(x, n):
 # c_l = sum over n >= 1, odd m with 2n + m = l + 2 of binom(-1/2, n) binom(-2n, m) b^m.
 # The far series' coefficients w_l = -c_l / (l + 1) (see _far_jet) as a matrix acting on
 # the odd powers of b: w = _MULTIPOLE_MATRIX @ (b, b^3, ...). One product instead of a sum
-# per term: b is traced (an argument of the custom JVP), and its ~300 scalar operations
-# took 0.1 s to trace per call.
+# per term: b is traced (an argument of the custom JVP), and a sum of ~300 scalar
+# operations costs about 0.1 s to trace per call.
 _MULTIPOLE_ORDERS = range(1, 2 * MULTIPOLE_TERMS, 2)  # Python ints: the binomials' products pass int64
 _MULTIPOLE_MATRIX = np.array(
     [
@@ -379,11 +379,11 @@ def _near_jet(s, z, b, wanted, regime):
     if regime == LONG:
         return _long_jet(s, z, b, wanted)
     wall_distance2 = (safe_sqrt(s) - 1.0) ** 2 + jnp.maximum(jnp.abs(z) - b, 0.0) ** 2
-    # The wall's integral is computed into memory (its own loop), not fused with the faces'.
-    # In one loop, jit(jacfwd) of the field at 88 points with b traced (a design's magnet,
-    # whose height is an argument of the compiled program) took LLVM's optimiser 3.5-7
-    # minutes and 9-17 GB (XLA CPU, jaxlib 0.10.2), and vmap(jacfwd) of a thin magnet ran
-    # at 1.4 s per 1e5 points; apart, 2-5 s and 0.3-0.5 GB, and 0.05 s per 1e5 points.
+    # The wall's integral is computed into memory (its own loop), not fused with the faces':
+    # fused into one loop with b traced (a design's magnet, whose height is an argument of
+    # the compiled program), jit(jacfwd) of the field costs XLA CPU's LLVM optimiser minutes
+    # and gigabytes, and vmap(jacfwd) of a thin magnet runs ~30 times slower; apart, seconds,
+    # a fraction of a gigabyte, and 0.05 s per 1e5 points.
     wall, faces = _materialized(_wall_jet(s, z, b, wanted), s), _faces_jet(s, z, b, wanted)
     return {name: jnp.where(wall_distance2 > (WALL_SWITCH * b) ** 2, wall[name], faces[name]) for name in wanted}
 
@@ -433,10 +433,10 @@ def _zoned_jet(s, z, far, zone, b, names, regime):
 
 # Points per chunk of the near points of a partitioned call; calls of at least two chunks
 # are partitioned (see _partitioned; also _derived's series), unless more than MOSTLY_NEAR
-# of their points are near. Measured on 2 cores (interleaved against the partition before
-# 2026-11-25, best of 5-7, 1e4 to 1e6 points with 4 % to 100 % of them near): chunks of
-# 1024 to 16384 points alike within the noise at 1e5 and 1e6 points, 2048 or less faster
-# at 1e4; above 3/4 near, both kernels elementwise beat the near points in chunks.
+# of their points are near. On 2 cores, from 1e4 to 1e6 points with 4 % to 100 % of them
+# near, chunks of 1024 to 16384 points run alike at 1e5 and 1e6 points and 2048 or less
+# run faster at 1e4 (benchmarks/fields.py); above 3/4 near, both kernels elementwise beat
+# the near points in chunks.
 PARTITION_CHUNK = 2048
 MOSTLY_NEAR = 3 / 4
 

@@ -8,7 +8,7 @@ cells' centres c_i (collocation) gives 3N linear equations
     M_i = chi (H_ext(c_i) + sum_j (T(c_i - c_j) - delta_ij 1) M_j)
     (1 - chi (T - 1)) M = chi H_ext,          chi = mu_r - 1,
 
-solved by LU (lineax). T depends on the cells' index differences only, so it is
+solved by LU (``jax.scipy.linalg.solve``). T depends on the cells' index differences only, so it is
 evaluated once per difference on the grid, (2 n_x - 1)(2 n_y - 1)(2 n_z - 1) tensors,
 not N^2. Equal cells make one body's system symmetric, which is what makes the co-energy's
 gradient the force (below); the blocks between bodies of unequal or turned cells are not
@@ -56,7 +56,7 @@ from typing import Literal
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import lineax as lx
+import jax.scipy as jsp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
@@ -67,6 +67,7 @@ from magdesign._numerics import (
     SATURATION_SHORTEST_STEP,
     float_array,
 )
+from magdesign._tracing import checked
 from magdesign._validation import check_last_axis, check_positive, check_scalar
 from magdesign.fields.cuboid import FAR_NODES, cuboid_tensor
 from magdesign.units import MU0
@@ -385,13 +386,13 @@ def _solve(matrix, bodies, external):
     chi, limit = _per_cell(bodies)
     rows = jnp.repeat(chi[:, 0], 3)
     system = jnp.eye(3 * n) - rows[:, None] * (matrix - jnp.eye(3 * n))
-    linear = lx.linear_solve(lx.MatrixLinearOperator(system), rows * external.reshape(-1), lx.LU()).value.reshape(n, 3)
+    linear = jsp.linalg.solve(system, rows * external.reshape(-1)).reshape(n, 3)
     if all(body.saturation is None for body in bodies):
         return linear
     # the start: the linear answer pulled onto the law (|J| < J_s)
     start = law(linear, 1.0, limit)
     polarization, failed = _saturated(matrix, external, chi, limit, start)
-    return eqx.error_if(
+    return checked(
         polarization,
         failed,
         f"soft-magnetic saturation: the solve of the cells' magnetisation did not converge in {SATURATION_MAX_STEPS} "

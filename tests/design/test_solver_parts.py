@@ -15,6 +15,7 @@ import lineax as lx
 import numpy as np
 import pytest
 
+from magdesign._tracing import checked
 from magdesign.design import Limit, Objective, Problem, Target, Variable, solve, sweep
 from magdesign.design._linear import LUOrSVD
 from magdesign.design.spec import default_spec, problem_from_spec
@@ -385,9 +386,9 @@ def test_the_model_is_traced_once_for_a_solve_and_a_sweep(objective):
     assert len(calls) == 1
 
 
-def _raising_problem():
+def _raising_problem(check):
     def model(v):
-        return {"f": eqx.error_if(v["x"] ** 2, v["x"] > 0.5, "x above 0.5"), "g": v["x"]}
+        return {"f": check(v["x"] ** 2, v["x"] > 0.5, "x above 0.5"), "g": v["x"]}
 
     problem = Problem(model, [Variable("x", -1.0, 1.0)], targets=[Target("g", 0.8)], objective=Objective("f", "min"))
     return problem, jnp.asarray([0.9]), jnp.asarray(solver.problem_arrays(problem, np)[4])
@@ -395,10 +396,10 @@ def _raising_problem():
 
 @pytest.mark.parametrize("solve_first", [False, True])
 def test_a_model_traced_outside_the_solver_keeps_raising_its_errors_and_inside_gives_a_status(solve_first):
-    """The solver traces a model with equinox's runtime errors as NaN (reported as a
-    status), a plain call with errors raised; neither reuses the other's trace, whichever
-    comes first."""
-    problem, y0, theta = _raising_problem()
+    """The solver traces the library's checks (``checked``, as a saturating soft part's)
+    as NaN, reported as a status; a plain call raises; neither reuses the other's trace,
+    whichever comes first."""
+    problem, y0, theta = _raising_problem(checked)
     for step in ("solve", "plain", "solve") if solve_first else ("plain", "solve", "plain"):
         if step == "solve":
             # the NaN beyond x = 0.5 stops the search short of the target: a status, no exception
@@ -406,6 +407,14 @@ def test_a_model_traced_outside_the_solver_keeps_raising_its_errors_and_inside_g
         else:
             with pytest.raises(Exception, match="x above 0.5"):
                 jax.block_until_ready(solver._jet(problem, y0, theta))
+
+
+def test_a_models_own_runtime_error_reaches_the_user():
+    """A model's own equinox check that fails during a solve stops it with the model's
+    message: the solver does not turn a model's error into a number or a status."""
+    problem, _, _ = _raising_problem(eqx.error_if)
+    with pytest.raises(Exception, match="x above 0.5"):
+        solve(problem)
 
 
 @pytest.mark.parametrize("fixed_input", [True, False])
@@ -466,3 +475,18 @@ def test_the_solver_takes_its_thresholds_from_the_sqp_it_is_given():
     key = lambda sqp: solver._structure(problem, solver.settings_of(1e-10, 1e-13, 100, sqp))[0]  # noqa: E731
     assert key(solver.SQP(point_seconds=0.0, chain=2)) == key(solver.SQP())
     assert key(solver.SQP(escapes=0)) != key(solver.SQP())
+
+
+def test_the_solvers_program_calls_no_python():
+    """The default design's compiled core holds no host callback (an equinox runtime check
+    is one): JAX's persistent cache keeps no program that calls back to Python, and the
+    command would compile the solver afresh on every run. Traced here outside
+    ``errors_as_nan``, so that a library's own check would show."""
+    from magdesign.design._sqp.program import _compiled, _host, _start, _structure, settings_of
+
+    problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
+    settings = settings_of(1e-8, 1e-8, 20)
+    key, arrays = _structure(problem, settings)
+    host = _host(problem)
+    text = _compiled(key, False).lower(arrays, _start(problem, None, host.arrays), host.arrays[4]).as_text()
+    assert "callback" not in text

@@ -1,11 +1,12 @@
 """The polish: Newton (optimistix) on the KKT or feasibility equations of the search's
-active set, and the implicit derivatives of its root (optimistix's implicit adjoint)."""
+active set, and the implicit derivatives of its root."""
 
 from typing import TYPE_CHECKING
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import lineax as lx
 import optimistix as optx
 from jaxtyping import Array, Bool, Float
 
@@ -117,29 +118,26 @@ def _in_theta(equations, z, jet, theta):
     return eqx.tree_at(lambda j: (j.v, j.J, j.outputs), jet, (v, J, outputs))
 
 
-# optimistix's implicit adjoint, with the polish's linear solver
-_ADJOINT = optx.ImplicitAdjoint(linear_solver=LUOrSVD())
-
-
 def _implicit_derivatives(equations, z, jet, theta, usable):
     """(len(z), p) d z / d theta at a root z of the polish's ``equations``, where the
-    model's :class:`Jet` is ``jet`` (the polish's last): the tangents that optimistix's
-    implicit adjoint gives a root find's answer, asked of it at the root, of the
-    equations to first order about z
-    (:func:`_linearised`), so that the model is not evaluated again, nor traced again,
-    unless it depends on theta (fixed inputs). Forward mode through the polish's loop
-    itself would trace it whole under JAX's jvp and vmap, and with it the model.
+    model's :class:`Jet` is ``jet`` (the polish's last): the implicit function theorem
+    applied to the equations to first order about z (:func:`_linearised`), so that the
+    model is not evaluated again, nor traced again, unless it depends on theta (fixed
+    inputs). Forward mode through the polish's loop itself would trace it whole under
+    JAX's jvp and vmap, and with it the model.
 
-    ``usable``: False where z or the equations there are not finite. The equations
-    are then zero (so are the derivatives, which the caller masks): lineax checks the
-    implicit solve's answer with an equinox error, which, traced as NaN (see
-    :func:`~magdesign._tracing.errors_as_nan`), turned every member of a vmapped batch to NaN as soon as one
-    member's answer was not finite, the derivatives of a sweep's good points with it."""
+    One solve with the polish's linear solver per column of theta, ``throw=False``: a
+    column that is not finite stays NaN in its own batch member (the caller masks it), not
+    an error that would stop the batch. ``usable``: False where z or the equations there
+    are not finite; the equations are then zero, and so are the derivatives."""
+    inputs = (equations, theta, z, jet, usable)
+    operator = lx.JacobianLinearOperator(lambda root, _: _linearised(root, None, inputs), z)
 
-    def root_of(theta):
-        return _ADJOINT.apply(_given_root, _linearised, (equations, theta, z, jet, usable), frozenset())[0]
+    def column(direction):
+        moved = jax.jvp(lambda t: _linearised(z, None, (equations, t, z, jet, usable)), (theta,), (direction,))[1]
+        return -lx.linear_solve(operator, moved, LUOrSVD(), throw=False).value
 
-    return jax.jacfwd(root_of)(theta)
+    return jax.vmap(column, out_axes=1)(jnp.eye(theta.shape[0], dtype=theta.dtype))
 
 
 def _solvable(equations, z, jet, theta, dz, *, sqp):
@@ -162,14 +160,9 @@ def _solvable(equations, z, jet, theta, dz, *, sqp):
     return jnp.concatenate([solvable, jnp.ones(theta.shape[0] - n_rows, bool)])
 
 
-def _given_root(inputs):
-    return inputs[2], None
-
-
 def _linearised(root, _, inputs):
     """The equations to first order in the root about z: exact derivatives at z, in the
-    root from the model's jet there, in theta from :func:`_in_theta`. (``inputs`` ends
-    with what optimistix's adjoint appends.)"""
+    root from the model's jet there, in theta from :func:`_in_theta`."""
     equations, theta, z, jet, usable = inputs[:5]
     return jnp.where(
         usable, equations.rows(z, _in_theta(equations, z, jet, theta)) + equations.tangent(jet, z, root - z), 0.0
