@@ -5,8 +5,8 @@ Each :class:`Key` gives its table and name (dotted: ``mechanics.thickness``; the
 for a name the spec chooses, as a design variable's parameter), its type, SI unit, default,
 physical domain, plausible range for a plain number, presets and a one-line meaning.
 
-The readers (:mod:`magdesign.scene.build`, :mod:`magdesign.scene.loads`,
-:mod:`magdesign.design.spec`, :mod:`magdesign.design.tolerance`) look every key up here
+The readers (:mod:`magdesign.spec.scene`, :mod:`magdesign.scene.loads`,
+:mod:`magdesign.spec.design`, :mod:`magdesign.spec.tolerance`) look every key up here
 (:func:`lookup`): a key read in code and missing from this table, or read as another type,
 unit or default than the table gives, raises :class:`UnlistedKeyError` (a programming error,
 never a bad spec). The spec reference (:mod:`magdesign.spec.reference`) is rendered from it.
