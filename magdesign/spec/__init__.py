@@ -2,6 +2,7 @@
 
 - :mod:`magdesign.spec.keys`: the one table of spec keys (type, unit, default, physical
   domain, plausible range of each);
+- :mod:`magdesign.spec.checks`: looking keys up in it, and checking the values read;
 - :mod:`magdesign.spec.table`: reading one TOML table key by key against it;
 - :mod:`magdesign.spec.scene`: scenes from a spec's tables (:func:`scene_from_spec`);
 - :mod:`magdesign.spec.design`: design specs, read into a :class:`~magdesign.design.Problem`
@@ -17,11 +18,11 @@ Every error in a spec is a :class:`SpecError` (one line naming the key); it is
 
 import importlib
 
+from magdesign.spec.checks import PlausibilityWarning as PlausibilityWarning
+from magdesign.spec.checks import UnlistedKeyError as UnlistedKeyError
+from magdesign.spec.checks import lookup as lookup
 from magdesign.spec.keys import KEYS as KEYS
 from magdesign.spec.keys import Key as Key
-from magdesign.spec.keys import PlausibilityWarning as PlausibilityWarning
-from magdesign.spec.keys import UnlistedKeyError as UnlistedKeyError
-from magdesign.spec.keys import lookup as lookup
 from magdesign.units import SpecError as SpecError
 
 # The readers load on first use: they build on magdesign.scene and magdesign.design, whose

@@ -54,9 +54,9 @@ from magdesign.scene import (
     with_parameters,
 )
 from magdesign.scene.mechanics import Dome
-from magdesign.spec.keys import check_output_number, fields
+from magdesign.spec.checks import check_domain, check_output_number, fields
 from magdesign.spec.scene import check_magnet_fits, check_wall, scene_from_spec
-from magdesign.spec.table import check_domain, check_keys, parameter_unit, sub_table
+from magdesign.spec.table import check_keys, parameter_unit, sub_table
 from magdesign.units import SpecError, echo, parse, unit_factor, written_unit
 
 # The keys of an entry of each design table, from the key table (a target's tolerance is read

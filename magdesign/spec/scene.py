@@ -31,7 +31,8 @@ from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions, rotation
 from magdesign.scene.solids import Solid, check_apart, solid
-from magdesign.spec.keys import KEYS, fields
+from magdesign.spec.checks import fields
+from magdesign.spec.keys import KEYS
 from magdesign.spec.sizes import check_fits
 from magdesign.spec.table import Table, check_tables
 from magdesign.units import SpecError, echo, uT

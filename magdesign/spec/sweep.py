@@ -23,8 +23,9 @@ import numpy as np
 from magdesign.design.problem import Problem
 from magdesign.design.sweep import sweepable
 from magdesign.scene.core import AbstractScene
+from magdesign.spec.checks import check_domain, spec_name
 from magdesign.spec.design import parameter_units, solved_spec
-from magdesign.spec.keys import KEYS, check_domain, spec_name
+from magdesign.spec.keys import KEYS
 from magdesign.spec.scene import scene_from_spec
 from magdesign.spec.sizes import check_fits
 from magdesign.units import SpecError, convert, parse, written_unit

@@ -34,8 +34,9 @@ from jaxtyping import Array, Float
 from magdesign.design.problem import Problem
 from magdesign.scene import AbstractScene, Loads, loads_from_spec, parameters, with_parameters
 from magdesign.scene import effects as fx
+from magdesign.spec.checks import domain_text, fields, listed
 from magdesign.spec.design import problem_from_spec, target_tolerance
-from magdesign.spec.keys import KEYS, domain_text, fields, listed
+from magdesign.spec.keys import KEYS
 from magdesign.spec.scene import NDFEB_DRIFT
 from magdesign.spec.table import check_keys, parameter_unit, sub_table
 from magdesign.units import SpecError, echo, parse, written_unit
