@@ -36,8 +36,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from magdesign.design import solve, sweep
-from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.mechanics import MooneyRivlin
+from magdesign.spec.design import default_spec, problem_from_spec
 from magdesign.units import mm, mT
 
 sys.path.insert(0, "tests/design")
@@ -77,7 +77,7 @@ FRESH_PROCESS = """
 import time
 from magdesign.cli import use_compilation_cache
 from magdesign.design import solve
-from magdesign.design.spec import default_spec, problem_from_spec
+from magdesign.spec.design import default_spec, problem_from_spec
 use_compilation_cache()
 problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
 began = time.perf_counter()
@@ -92,7 +92,7 @@ print(time.perf_counter() - began, result.status)
 FIRST_CALL_STAGES = """
 import importlib, re, resource, time
 from magdesign._tracing import errors_as_nan, gc_paused
-from magdesign.design.spec import default_spec, problem_from_spec
+from magdesign.spec.design import default_spec, problem_from_spec
 solver = importlib.import_module("magdesign.design.solve")
 problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
 settings = solver.settings_of(solver.DESIGN_RTOL, solver.DESIGN_ATOL, 100)

@@ -25,9 +25,9 @@ from jax import lax
 
 import magdesign  # noqa: F401  (float64)
 from magdesign.design import solve
-from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.mechanics import MooneyRivlin, _axisymmetric, _blocks, dome_compliance, dome_curve
 from magdesign.mechanics.dome import DEFAULT_MESH
+from magdesign.spec.design import default_spec, problem_from_spec
 from magdesign.units import mm
 
 REPEATS = 5

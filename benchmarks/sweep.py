@@ -38,7 +38,7 @@ def child(devices, points, fidelity, cores):
 
     jax.config.update("jax_num_cpu_devices", devices)
     from magdesign.design import sweep
-    from magdesign.design.spec import default_spec, problem_from_spec
+    from magdesign.spec.design import default_spec, problem_from_spec
 
     problem, _ = problem_from_spec(default_spec(), fidelity=fidelity)
     if fidelity == "axisymmetric":

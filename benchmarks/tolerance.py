@@ -19,8 +19,9 @@ import time
 import tomllib
 
 from magdesign.design import solve
-from magdesign.design.spec import default_spec
-from magdesign.design.tolerance import monte_carlo, robust_solve, tolerance_problem_from_spec
+from magdesign.design.tolerance import monte_carlo, robust_solve
+from magdesign.spec.design import default_spec
+from magdesign.spec.tolerance import tolerance_problem_from_spec
 
 SAMPLES = int(sys.argv[sys.argv.index("--samples") + 1]) if "--samples" in sys.argv else 100_000
 

@@ -52,11 +52,11 @@ from matplotlib.figure import Figure
 from magdesign._files import replaced
 from magdesign._progress import say, stage
 from magdesign.design import solve
-from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.fields import cylinder, film, soft
 from magdesign.mechanics import LinearElastic, MooneyRivlin, dome_compliance, layer_stiffness
 from magdesign.scene import scene_from_spec
 from magdesign.scene.effects import AreaAveraging
+from magdesign.spec.design import default_spec, problem_from_spec
 from magdesign.units import MU0, mm, um
 
 # The levels measured; the QUICK_ ones are --quick's tier.

@@ -25,7 +25,6 @@ Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax/<this C
 """
 
 import argparse
-import csv
 import hashlib
 import importlib.metadata
 import json
@@ -38,7 +37,6 @@ import warnings
 from pathlib import Path
 
 import jax
-import numpy as np
 
 from magdesign import _progress, accuracy
 from magdesign._progress import stage, wrote
@@ -48,18 +46,8 @@ from magdesign.design import tolerance as tolerance_analysis
 from magdesign.design.plot import plot_design, plot_sweep
 from magdesign.design.report import format_quantity
 from magdesign.design.solve import usable_cores
-from magdesign.design.spec import (
-    default_spec,
-    exact_levels,
-    fidelity_levels,
-    input_units,
-    load_spec,
-    problem_from_spec,
-    stated_value,
-)
 from magdesign.scene import (
     loads_from_spec,
-    scene_from_spec,
     simulate,
     simulation_json,
     simulation_table,
@@ -67,9 +55,19 @@ from magdesign.scene import (
 )
 from magdesign.scene.core import warn_if_clipping
 from magdesign.scene.picture import plot_scene
-from magdesign.spec.keys import KEYS, check_domain, spec_name
+from magdesign.spec.design import (
+    default_spec,
+    exact_levels,
+    fidelity_levels,
+    load_spec,
+    problem_from_spec,
+    stated_value,
+)
+from magdesign.spec.scene import scene_from_spec
 from magdesign.spec.sizes import check_fits
-from magdesign.units import SpecError, parse, written_unit
+from magdesign.spec.sweep import input_units, sweep_points
+from magdesign.spec.tolerance import tolerance_problem_from_spec
+from magdesign.units import SpecError
 
 EXIT_INTERNAL = 1
 EXIT_BAD_SPEC = 2
@@ -307,7 +305,7 @@ def run_solve(args):
     if "tolerances" in spec.get("design", {}):  # read by the tolerance command: one rule for both
         with warnings.catch_warnings():  # the spec's warnings are said once, above
             warnings.simplefilter("ignore")
-            tolerance_analysis.tolerance_problem_from_spec(spec, fidelity=None if auto else args.fidelity)
+            tolerance_problem_from_spec(spec, fidelity=None if auto else args.fidelity)
     levels = _levels_at(spec, None if auto else args.fidelity)
     stage(f"solving at {levels} ({FIRST_CALL})")
     first = solve_problem(problem)
@@ -424,90 +422,13 @@ def _start_devices(args):
         )
 
 
-def _sweep_points(args, units):
-    """({key: (k,) SI values}, {key: display unit}, grid) from --over or --points."""
-    if bool(args.over) == bool(args.points):
-        raise SpecError("sweep: give --over KEY=LO:HI:N (one or more) or --points CSV")
-
-    def unit_of(key, where):
-        if key not in units:
-            raise SpecError(f"{where}: unknown key {key!r}; expected one of {', '.join(units)}")
-        return units[key]
-
-    if args.points:
-        try:
-            with open(args.points, newline="", encoding="utf-8") as file:
-                rows = [row for row in csv.reader(file) if any(cell.strip() for cell in row)]
-        except OSError as error:
-            raise SpecError(f"--points {args.points}: cannot read ({error.strerror})") from None
-        except (UnicodeDecodeError, csv.Error):
-            raise SpecError(f"--points {args.points}: not a CSV text file (UTF-8)") from None
-        if len(rows) < 2:
-            raise SpecError(f"--points {args.points}: expected a header row of keys and at least one point")
-        keys = [key.strip() for key in rows[0]]
-        twice = next((key for key in keys if keys.count(key) > 1), None)
-        if twice is not None:
-            raise SpecError(f"--points {args.points}: {twice} is swept twice (two columns of the header)")
-        values = {key: [] for key in keys}
-        for number, row in enumerate(rows[1:], start=2):
-            if len(row) != len(keys):
-                raise SpecError(f"--points {args.points}: line {number} has {len(row)} cells, the header {len(keys)}")
-            for key, cell in zip(keys, row):
-                si, _ = unit_of(key, f"--points {args.points}")
-                text = cell.strip()
-                values[key].append(_swept_value(text, si, key, f"--points line {number} {key}"))
-        return values, {key: unit_of(key, "--points")[1] for key in keys}, False
-    values, shown = {}, {}
-    for item in args.over:
-        key, equals, rest = item.partition("=")
-        key = key.strip()
-        where = f"--over {item}"
-        parts = rest.split(":")
-        if not equals or len(parts) != 3:
-            raise SpecError(f"{where}: expected KEY=LO:HI:N, e.g. mechanics.outer_radius=6mm:10mm:5")
-        si, display = unit_of(key, where)
-        if key in values:
-            raise SpecError(f"{where}: {key} is swept twice")
-        low, high = (_swept_value(t, si, key, f"--over {key}") for t in parts[:2])
-        try:
-            count = int(parts[2])
-        except ValueError:
-            raise SpecError(f"{where}: N must be a whole number, got {parts[2]!r}") from None
-        if count < 1:
-            raise SpecError(f"{where}: N must be at least 1, got {count}")
-        if not low < high:
-            raise SpecError(f"{where}: LO must be below HI")
-        check_fits(where, count, what="its values")  # the whole grid's records: the sweep checks them
-        values[key] = np.linspace(low, high, count)
-        shown[key] = written_unit(parts[0].strip()) or display
-    return values, shown, True
-
-
-def _swept_value(text, si, key, where):
-    """One swept value of ``key`` (SI), read as a spec value: a scene parameter's is checked
-    as the spec's would be (its physical domain; a warning for an implausible plain number)."""
-    written = float(text) if _is_number(text) else text.strip()
-    value = parse(written, si, key=where)
-    if spec_name(key) in KEYS:
-        check_domain(key, value, key=where, unit=si, written=written)
-    return value
-
-
-def _is_number(text):
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def run_sweep(args):
     _start_devices(args)
     spec = load_spec(args.spec)
     if args.plot and args.points is None and len(args.over) > 2:
         raise SpecError("--plot: a picture shows 1 or 2 swept keys (curves or maps)")
     problem, scene = problem_from_spec(spec, fidelity=args.fidelity)
-    values, shown, grid = _sweep_points(args, input_units(spec, problem, scene))
+    values, shown, grid = sweep_points(args.over, args.points, input_units(spec, problem, scene))
     if args.plot and len(values) > 2:
         raise SpecError("--plot: a picture shows 1 or 2 swept keys (curves or maps)")
     count = math.prod(len(v) for v in values.values()) if grid else len(next(iter(values.values())))
@@ -596,7 +517,7 @@ def run_tolerance(args):
     if not 0 <= args.seed < 2**63:  # jax.random.key takes a 64-bit signed integer
         raise SpecError(f"--seed {args.seed}: expected a whole number from 0 to 2**63 - 1")
     spec = load_spec(args.spec)
-    tp = tolerance_analysis.tolerance_problem_from_spec(spec)
+    tp = tolerance_problem_from_spec(spec)
     # the samples' outputs are kept (samples x outputs float64), twice while they are joined
     check_fits(f"--samples {args.samples}", args.samples * len(tp.problem.outputs), factor=2, what="its outputs")
     levels = fidelity_levels(spec)

@@ -32,11 +32,11 @@ from _report import Report, arguments, number, progress  # noqa: E402
 
 import magdesign  # noqa: E402,F401  (turns on float64)
 from magdesign.design import solve  # noqa: E402
-from magdesign.design.spec import default_spec, exact_levels, fidelity_levels, problem_from_spec  # noqa: E402
 from magdesign.fields import cylinder, cylinder_axial  # noqa: E402
 from magdesign.inverse import InverseStatus, displacement_grid, invert_displacement  # noqa: E402
 from magdesign.mechanics import MooneyRivlin, dome_compliance, dome_curve, lag_pole, time_constant_from_pole  # noqa: E402
 from magdesign.scene import Loads, scene_from_spec, simulate  # noqa: E402
+from magdesign.spec.design import default_spec, exact_levels, fidelity_levels, problem_from_spec  # noqa: E402
 from magdesign.units import mm, mT, uT  # noqa: E402
 
 NAME = "dome_hall"
@@ -751,7 +751,7 @@ def write_sections(report, sat, dome, des, lag, inv, quick):
     report.text(
         "The built-in default design (`magdesign/design/default.toml`): rest gap and wall thickness free, "
         "0.32 mm/N at 5 N as the target, the largest field component at most 4.8 mT, the largest sensitivity. "
-        "Solved at the spec's levels, then from that answer at the exact levels (`design.spec.exact_levels`), "
+        "Solved at the spec's levels, then from that answer at the exact levels (`spec.design.exact_levels`), "
         "as `magdesign solve --fidelity auto` does. Times are wall times of this run, compiling included; the "
         "machine is shared, so they are inflated."
     )

@@ -26,10 +26,10 @@ from _report import Report, arguments, progress  # noqa: E402
 from scipy.optimize import brentq  # noqa: E402
 
 from magdesign.design import solve  # noqa: E402
-from magdesign.design.spec import load_spec, problem_from_spec  # noqa: E402
 from magdesign.fields import film, film_angle, film_magnitude  # noqa: E402
 from magdesign.inverse import film_forces  # noqa: E402
 from magdesign.scene import Loads, outputs, scene_from_spec, simulate, with_parameters  # noqa: E402
+from magdesign.spec.design import load_spec, problem_from_spec  # noqa: E402
 from magdesign.units import deg, kPa, mm, mT  # noqa: E402
 
 NAME = "film_hall"
@@ -681,7 +681,7 @@ def main(argv=None):
     design_table = design_spec["design"]
     report.text(
         "The spec is `examples/film_hall.toml` with the published stack and no effects (above), solved by "
-        "`magdesign.design.spec.problem_from_spec` and `magdesign.design.solve`. Its [design] table: "
+        "`magdesign.spec.design.problem_from_spec` and `magdesign.design.solve`. Its [design] table: "
         f"variables {', '.join(design_table['variables'])}; targets "
         f"{', '.join(f'{k} = {v}' for k, v in design_table['targets'].items())}; limits "
         f"{', '.join(k + ' <= ' + str(v['upper']) for k, v in design_table['limits'].items())}; load sweep normal "

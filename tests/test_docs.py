@@ -78,8 +78,8 @@ def run_python(body, cwd, env):
 
 
 def read_spec(body):
-    from magdesign.design.spec import default_spec, problem_from_spec
     from magdesign.scene import scene_from_spec
+    from magdesign.spec.design import default_spec, problem_from_spec
 
     spec = tomllib.loads(body)
     if "shape" not in spec.get("magnet", {}):  # a fragment: read on top of the default design

@@ -10,10 +10,10 @@ import pytest
 
 from magdesign.cli import main
 from magdesign.design.report import _missed
-from magdesign.design.spec import load_spec
-from magdesign.design.tolerance import tolerance_problem_from_spec
 from magdesign.scene import scene_from_spec
 from magdesign.spec import sizes
+from magdesign.spec.design import load_spec
+from magdesign.spec.tolerance import tolerance_problem_from_spec
 from magdesign.units import SpecError
 
 EXAMPLES = Path(__file__).parents[1] / "examples"

@@ -268,7 +268,7 @@ def per_problem(fn):
     return memoised
 
 
-# The spec each problem was built from (magdesign.design.spec.problem_from_spec), by id, for
+# The spec each problem was built from (magdesign.spec.design.problem_from_spec), by id, for
 # as long as the problem lives: a solved result writes it back with its answer in place.
 _SOURCES = {}
 

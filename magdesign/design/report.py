@@ -87,7 +87,7 @@ class DesignResult(eqx.Module):
         units: display units by name (None: SI).
         objective: (output, "max" | "min") of the problem's objective, or None.
         source: the spec the problem was built from
-            (:func:`magdesign.design.spec.problem_from_spec`, at the levels it was solved
+            (:func:`magdesign.spec.design.problem_from_spec`, at the levels it was solved
             at), or None: what :meth:`spec` writes the answer into.
     """
 
@@ -257,20 +257,20 @@ class DesignResult(eqx.Module):
         Raises:
             ValueError: the result's problem was not built from a spec, or a value is not finite.
         """
-        # imported here: magdesign.design.spec imports the solver, which imports this module
-        from magdesign.design.spec import solved_spec
+        # imported here: magdesign.spec.design imports magdesign.design, whose package imports this module
+        from magdesign.spec.design import solved_spec
 
         if self.source is None:
             raise ValueError(
                 "this result's problem was not built from a spec "
-                "(magdesign.design.spec.problem_from_spec): there is no spec to write"
+                "(magdesign.spec.design.problem_from_spec): there is no spec to write"
             )
         return solved_spec(self.source, self.parameters, self.units)
 
     def write_spec(self, path) -> None:
         """Write :meth:`spec` to the TOML file ``path`` under the header "# solved by magdesign
         <version> on <date>: status <status>"; the file is replaced whole or not at all."""
-        from magdesign.design.spec import write_spec
+        from magdesign.spec.design import write_spec
 
         violated = f" (not met: {', '.join(self.violated)})" if self.violated else ""
         write_spec(path, self.spec(), status=f"{self.status}{violated}")

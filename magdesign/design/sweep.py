@@ -3,7 +3,7 @@
 A swept key is anything a design's optimum depends on: a target's value (its output's
 name, "compliance"), a limit's bound ("field_max.upper"), or a scene parameter that the
 problem holds fixed ("mechanics.outer_radius", for a problem whose model is a
-:class:`~magdesign.design.spec.SceneModel`, or one of the problem's own ``fixed``
+:class:`~magdesign.spec.design.SceneModel`, or one of the problem's own ``fixed``
 inputs). Every point is a full solve with its status, parameters, outputs and the
 implicit derivatives of its optimum with respect to each of those inputs.
 """
@@ -133,7 +133,7 @@ def sweep(
         ValueError: a key that cannot be swept, values that are not finite; a
             :class:`~magdesign.units.SpecError` for a problem built from a spec where a
             swept scene parameter fails a check its spec value would fail
-            (:func:`magdesign.design.spec.check_swept`).
+            (:func:`magdesign.spec.sweep.check_swept`).
     """
     if isinstance(over, str):
         over = {over: values}
@@ -156,7 +156,7 @@ def sweep(
     points, shape = points_of(over, grid)
     source = source_of(problem)
     if source is not None:  # every swept scene parameter passes the checks of a spec value
-        from magdesign.design.spec import check_swept  # the spec reader imports this module
+        from magdesign.spec.sweep import check_swept  # the sweep grammar imports this module
 
         check_swept(source, over, grid)
     rows = [t.output for t in problem.targets] + [

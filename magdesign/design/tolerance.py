@@ -1,16 +1,9 @@
 """Tolerance analysis and robust design: a Monte Carlo over a design's own scene.
 
-A design spec states its tolerances beside its targets and limits::
-
-    [design.tolerances]
-    distribution = "normal"          # or "uniform": sizes are standard deviations, or half-widths
-    "magnet.remanence" = "3 %"       # any scene parameter: "%" of its value, or a quantity in its unit
-    "mechanics.c10" = { value = "5 %", distribution = "uniform" }   # one entry's own distribution
-    placement = "50 um"              # each sensor's x, y, z offset (or a list of 3 quantities)
-    tilt = "2 deg"                   # each chip's tilt angles alpha, beta, gamma (or a list of 3)
-    temperature = "10 K"             # the magnet's temperature change (drift of its remanence)
-    [design.targets]
-    compliance = { value = "0.32 mm/N", tolerance = "5 %" }   # met when |achieved - value| <= 5 %
+A design spec states its tolerances in a [design.tolerances] table, read into a
+:class:`~magdesign.spec.tolerance.ToleranceProblem` by
+:func:`~magdesign.spec.tolerance.tolerance_problem_from_spec` (the table's grammar is
+there).
 
 Each sample is the design's scene with its inputs moved: a parameter through
 :func:`~magdesign.scene.with_parameters`; placement, tilt and temperature through the scene's
@@ -37,7 +30,6 @@ axis) is analysed with the exact field where a placement tolerance moves its sen
 axis: the design solve keeps the cheap form, whose answer is the same.
 """
 
-import dataclasses
 import math
 import time
 
@@ -54,24 +46,11 @@ from magdesign._numerics import ROUNDING_SPREAD, TINY
 from magdesign.design.problem import Limit, Problem
 from magdesign.design.report import DesignResult, format_quantity
 from magdesign.design.solve import solve
-from magdesign.design.spec import problem_from_spec, target_tolerance
-from magdesign.scene import AbstractScene, Loads, loads_from_spec, outputs, parameters, with_parameters
-from magdesign.scene import effects as fx
-from magdesign.scene._spec import check_keys, parameter_unit, sub_table
-from magdesign.scene.build import NDFEB_DRIFT
-from magdesign.spec.keys import KEYS, domain_text, fields, listed
-from magdesign.units import SpecError, convert, echo, parse, written_unit
+from magdesign.scene import AbstractScene, outputs, parameters, with_parameters
+from magdesign.spec.tolerance import AXES, EFFECT_INPUTS, ToleranceProblem, check_spreads
+from magdesign.spec.tolerance import tolerance_problem_from_spec as tolerance_problem_from_spec
+from magdesign.units import convert
 
-DISTRIBUTIONS = tuple(KEYS["design.tolerances.distribution"].choices)
-# The standard deviation of a unit variate: N(0, 1), or uniform on [-1, 1].
-_UNIT_STD = {"normal": 1.0, "uniform": 1.0 / math.sqrt(3.0)}
-# Inputs that are effects' values: spec key -> (effect class, its field, SI unit, per sensor (x, y, z)?).
-EFFECT_INPUTS = {
-    "placement": (fx.Placement, "offsets", "m", True),
-    "tilt": (fx.ChipTilt, "angles", "rad", True),
-    "temperature": (fx.TemperatureDrift, "temperature_change", "K", False),
-}
-_AXES = {"placement": ("x", "y", "z"), "tilt": ("alpha", "beta", "gamma")}
 # Samples per compiled batch: bounds the memory of a run (a few hundred MB for the default scene).
 CHUNK = 16384
 PERCENTILES = (0.1, 1.0, 50.0, 99.0, 99.9)
@@ -82,214 +61,6 @@ NOISE_SIGMAS = 3.0
 # or after this many solves.
 ROBUST_RTOL = 1e-8
 ROBUST_ROUNDS = 20
-
-
-class Tolerance(eqx.Module):
-    """One toleranced input.
-
-    Attributes:
-        name: a scene parameter's spec key, or "placement", "tilt", "temperature".
-        size: the standard deviation ("normal") or half-width ("uniform"): SI, or a
-            fraction of the nominal value where ``relative``; (3,) for placement (m, along
-            x, y, z) and tilt (rad, alpha, beta, gamma), else a scalar.
-        relative: ``size`` is a fraction of the parameter's value at the design.
-        distribution: "normal" or "uniform".
-        written: the size as the spec wrote it, for reports.
-    """
-
-    name: str = eqx.field(static=True)
-    size: Float[Array, "*d"]
-    relative: bool = eqx.field(static=True)
-    distribution: str = eqx.field(static=True)
-    written: str = eqx.field(static=True)
-
-    def components(self, sensors: int) -> tuple[int, ...]:
-        """The shape of this input's variates: (sensors, 3) for placement and tilt, else ()."""
-        return (sensors, 3) if self.name in _AXES else ()
-
-    def labels(self, sensors: int) -> list[str]:
-        """The group of each variate, for sensitivities: "placement.x" (every sensor's x), ..."""
-        if self.name in _AXES:
-            return [f"{self.name}.{axis}" for _ in range(sensors) for axis in _AXES[self.name]]
-        return [self.name]
-
-
-class ToleranceProblem(eqx.Module):
-    """A design problem and the tolerances of its inputs.
-
-    Attributes:
-        problem: the design (:class:`~magdesign.design.Problem` whose model is the scene's).
-        scene: the design's scene, with the effects its tolerances move (added at zero
-            where the spec's scene does not list them: the same outputs).
-        loads: the load sweep the outputs are read over.
-        inputs: the toleranced inputs.
-        target_tolerances: (output, half-width (SI)) of each target the yield judges.
-        sensors: the scene's sensor count S.
-    """
-
-    problem: Problem
-    scene: AbstractScene
-    loads: Loads
-    inputs: tuple[Tolerance, ...]
-    target_tolerances: tuple[tuple[str, float], ...] = eqx.field(static=True)
-    sensors: int = eqx.field(static=True)
-
-    @property
-    def labels(self) -> list[str]:
-        """The group of each of the D variates, in order."""
-        return [label for t in self.inputs for label in t.labels(self.sensors)]
-
-    @property
-    def unit_std(self) -> np.ndarray:
-        """(D,) the standard deviation of each unit variate (1, or 1/sqrt(3) if uniform)."""
-        return np.concatenate(
-            [np.full(max(1, math.prod(t.components(self.sensors))), _UNIT_STD[t.distribution]) for t in self.inputs]
-        )
-
-    @property
-    def uniform(self) -> np.ndarray:
-        """(D,) True where a variate is uniform."""
-        return self.unit_std != 1.0
-
-    def at(self, values: dict) -> AbstractScene:
-        """The scene at design values {parameter: SI}, the problem's fixed inputs held."""
-        fixed = dict(zip(getattr(self.problem, "fixed_names", ()), getattr(self.problem, "fixed_values", ())))
-        return with_parameters(self.scene, {**fixed, **values})
-
-
-def _size(value, unit, where, per_axis):
-    """(size, relative?) of one entry: SI, (3,) for a per-axis input; a fraction where a
-    parameter's tolerance is written in "%"."""
-    relative = not per_axis and unit != "K" and written_unit(value) == "%"
-    if per_axis and isinstance(value, list):
-        if len(value) != 3:
-            raise SpecError(f"{where}: expected one quantity in {unit} or a list of 3 (x, y, z), got {echo(value)}")
-        sizes = [parse(item, unit, key=where) for item in value]
-    else:
-        sizes = [parse(value, "1" if relative else unit, key=where)] * (3 if per_axis else 1)
-    if any(size < 0 for size in sizes):
-        raise SpecError(f"{where}: a tolerance is a size (>= 0), got {echo(value)}")
-    return (np.asarray(sizes) if per_axis else np.asarray(sizes[0])), relative
-
-
-# A normal tolerance's draws stay in the parameter's physical domain out to this many standard
-# deviations (beyond, 0.27 % of draws for a two-sided bound: a spread this wide is refused).
-DOMAIN_SIGMAS = 3.0
-
-
-def _check_spread(name, nominal, width, distribution, where):
-    """SpecError naming ``where`` where the draws of scene parameter ``name`` (``nominal`` SI,
-    a standard deviation or half-width ``width`` SI) leave its physical domain (the key
-    table's): a uniform spread whose interval crosses a bound, a normal one whose
-    :data:`DOMAIN_SIGMAS` sigmas cross it. Refused rather than truncated: a draw outside is
-    not a part that exists (a negative remanence or stiffness)."""
-    domain = listed(name).domain
-    if domain is None or width == 0.0:
-        return
-    reach = width * (1.0 if distribution == "uniform" else DOMAIN_SIGMAS)
-    low, low_ok, high, high_ok = domain
-    lowest, highest = nominal - reach, nominal + reach
-    below = low is not None and (lowest < low or (lowest == low and not low_ok))
-    above = high is not None and (highest > high or (highest == high and not high_ok))
-    if below or above:
-        spread = "its interval" if distribution == "uniform" else f"{DOMAIN_SIGMAS:g} standard deviations"
-        raise SpecError(
-            f"{where}: the draws of {name} reach {lowest:g} to {highest:g} {parameter_unit(name)} ({spread} about "
-            f"{nominal:g}), "
-            f"outside its physical domain {domain_text(domain)}; expected a smaller tolerance"
-        )
-
-
-def _check_spreads(inputs, scene, where=None):
-    """:func:`_check_spread` of every toleranced scene parameter among ``inputs`` at
-    ``scene``'s values, naming ``where`` (default: the key, about the scene's value). Run
-    at load and again before a Monte Carlo: a solve moves the design variables from the
-    spec's start, and a spread that fits about the start can leave the domain about the
-    solved value (a wall solved thinner than its absolute tolerance)."""
-    known = parameters(scene)
-    for tolerance in inputs:
-        if tolerance.name in known:
-            nominal = float(known[tolerance.name])
-            width = float(tolerance.size) * (abs(nominal) if tolerance.relative else 1.0)
-            about = f"design.tolerances.{tolerance.name} (about the design's {tolerance.name} = {nominal:g})"
-            _check_spread(tolerance.name, nominal, width, tolerance.distribution, where or about)
-
-
-def _with_effect(scene, name, spec):
-    """The scene with the effect input ``name`` moves, added at zero where it is not listed."""
-    cls, field, _, _ = EFFECT_INPUTS[name]
-    if any(isinstance(effect, cls) for effect in scene.effects):
-        return scene
-    if name == "temperature":
-        coefficient = parse(
-            spec.get("scene", {}).get("temperature_coefficient", NDFEB_DRIFT),
-            "1/K",
-            key="scene.temperature_coefficient",
-        )
-        effect = fx.TemperatureDrift(coefficient=jnp.asarray(coefficient), temperature_change=jnp.asarray(0.0))
-    else:
-        effect = cls(**{field: jnp.zeros(3)})
-    return eqx.tree_at(lambda s: s.effects, scene, fx.in_order([*scene.effects, effect]))
-
-
-def tolerance_problem_from_spec(spec: dict, *, fidelity: str | None = None) -> ToleranceProblem:
-    """Read a design spec with a [design.tolerances] table (see the module docstring).
-
-    Raises:
-        SpecError: one line naming the key: a tolerance on an input the scene does not
-            have, a unit that does not fit, a negative size, an unknown distribution.
-    """
-    problem, scene = problem_from_spec(spec, fidelity=fidelity)
-    table = dict(sub_table(sub_table(spec, "design"), "tolerances", where="design.tolerances"))
-    default = table.pop("distribution", "normal")
-    if default not in DISTRIBUTIONS:
-        raise SpecError(f"design.tolerances.distribution: expected one of 'normal', 'uniform', got {echo(default)}")
-    if not table:
-        raise SpecError(
-            "design.tolerances: expected at least one toleranced input (a scene parameter, placement, "
-            "tilt or temperature)"
-        )
-    known = parameters(scene)
-    sensors = int(scene.sensor_poses()[0].shape[0])
-    inputs = []
-    for name, entry in table.items():
-        where = f"design.tolerances.{name}"
-        distribution = default
-        if isinstance(entry, dict):
-            check_keys(where, entry, fields("design.tolerances.*"))
-            if "value" not in entry:
-                raise SpecError(f"{where}.value: missing; expected the tolerance's size")
-            distribution = entry.get("distribution", default)
-            if distribution not in DISTRIBUTIONS:
-                raise SpecError(f"{where}.distribution: expected one of 'normal', 'uniform', got {echo(distribution)}")
-            where, entry = f"{where}.value", entry["value"]
-        if name in EFFECT_INPUTS:
-            _, _, unit, per_axis = EFFECT_INPUTS[name]
-            if name == "placement" and getattr(scene, "fidelity", None) == "axis":
-                # the on-axis form is exact on the axis only, which a placement error leaves
-                scene = dataclasses.replace(scene, fidelity="exact")
-            scene = _with_effect(scene, name, spec)
-        elif name in known:
-            unit, per_axis = parameter_unit(name), False
-        else:
-            raise SpecError(
-                f"{where}: unknown input; expected a scene parameter ({', '.join(sorted(known))}), "
-                "placement, tilt or temperature"
-            )
-        size, relative = _size(entry, unit, where, per_axis)
-        shown = entry if isinstance(entry, str) else echo(entry)
-        inputs.append(Tolerance(name, jnp.asarray(size), relative, distribution, shown))
-        _check_spreads(inputs[-1:], scene, where)
-
-    target_tolerances = []
-    for target in problem.targets:
-        entry = spec["design"]["targets"][target.output]
-        if not (isinstance(entry, dict) and "tolerance" in entry):
-            continue
-        where, value = f"design.targets.{target.output}.tolerance", entry["tolerance"]
-        width = target_tolerance(value, target.value, scene.output_units.get(target.output, "1"), where)
-        target_tolerances.append((target.output, width))
-    return ToleranceProblem(problem, scene, loads_from_spec(spec), tuple(inputs), tuple(target_tolerances), sensors)
 
 
 def perturb(scene: AbstractScene, inputs, sensors: int, u: Float[Array, " d"]) -> AbstractScene:
@@ -518,7 +289,7 @@ def monte_carlo(
     """The design at ``values`` ({variable: SI}) under its tolerances, by Monte Carlo.
 
     Args:
-        tp: the design and its tolerances (:func:`tolerance_problem_from_spec`).
+        tp: the design and its tolerances (:func:`~magdesign.spec.tolerance.tolerance_problem_from_spec`).
         values: the design's variables (e.g. a solve's ``parameters``).
         samples: how many perturbed scenes to simulate (>= 1).
         seed: the PRNG seed (jax.random); a run is reproducible for the same seed and chunk.
@@ -534,7 +305,7 @@ def monte_carlo(
     problem = tp.problem
     names = problem.outputs
     scene = tp.at(values)
-    _check_spreads(tp.inputs, scene)
+    check_spreads(tp.inputs, scene)
     began = time.perf_counter()
     nominal, parts = _first_order(tp, scene)
     chunks = -(-samples // chunk)
@@ -777,7 +548,7 @@ def tolerance_lines(tp: ToleranceProblem) -> str:
     """One line per toleranced input ("magnet.remanence  3 %  normal (standard deviation)")."""
     kinds = {"normal": "normal (standard deviation)", "uniform": "uniform (half-width)"}
     width = max(len(t.name) for t in tp.inputs) + 2
-    per = lambda t: " per sensor and axis" if t.name in _AXES else ""  # noqa: E731
+    per = lambda t: " per sensor and axis" if t.name in AXES else ""  # noqa: E731
     return "\n".join(f"  {t.name:<{width}}{t.written}{per(t)}, {kinds[t.distribution]}" for t in tp.inputs)
 
 

@@ -8,7 +8,6 @@ Example::
     print(simulation_table(result))
 """
 
-from magdesign.scene.build import scene_from_spec as scene_from_spec
 from magdesign.scene.core import MECHANICS_CONVERGED as MECHANICS_CONVERGED
 from magdesign.scene.core import AbstractScene as AbstractScene
 from magdesign.scene.core import SimulationResult as SimulationResult
@@ -26,3 +25,17 @@ from magdesign.scene.loads import Loads as Loads
 from magdesign.scene.loads import loads_from_spec as loads_from_spec
 from magdesign.scene.magnet_scene import MagnetScene as MagnetScene
 from magdesign.scene.pole_scene import PoleScene as PoleScene
+
+
+def __getattr__(name):
+    # scene_from_spec is the spec language's (magdesign.spec.scene), which builds scenes from
+    # this package's modules: it loads on first use, so that either package imports first
+    if name == "scene_from_spec":
+        from magdesign.spec.scene import scene_from_spec
+
+        return scene_from_spec
+    raise AttributeError(f"module 'magdesign.scene' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted({*globals(), "scene_from_spec"})

@@ -5,8 +5,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from magdesign.scene._spec import Table
 from magdesign.spec.sizes import check_fits
+from magdesign.spec.table import Table
 from magdesign.units import SpecError
 
 

@@ -5,7 +5,8 @@
 
 import numpy as np
 
-from magdesign.spec.keys import KEYS, KINDS, REQUIRED, TABLES, WRITTEN_UNITS, Depends, Key, domain_text
+from magdesign.spec.checks import domain_text
+from magdesign.spec.keys import KEYS, KINDS, REQUIRED, TABLES, WRITTEN_UNITS, Depends, Key
 from magdesign.units import convert
 
 _INTRO = """\

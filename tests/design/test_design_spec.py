@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from magdesign.design import solve
-from magdesign.design.spec import (
+from magdesign.fields import cylinder_axial
+from magdesign.spec.design import (
     default_spec,
     load_spec,
     problem_from_spec,
@@ -18,7 +19,6 @@ from magdesign.design.spec import (
     stated_value,
     write_spec,
 )
-from magdesign.fields import cylinder_axial
 from magdesign.units import SpecError, parse
 
 EXAMPLES = Path(__file__).parents[2] / "examples"

@@ -11,7 +11,7 @@ import pytest
 
 from magdesign.cli import main
 from magdesign.design import multistart, solve
-from magdesign.design.spec import load_spec, problem_from_spec
+from magdesign.spec.design import load_spec, problem_from_spec
 
 EXAMPLES = Path(__file__).parents[2] / "examples"
 DESIGNS = sorted(path.name for path in EXAMPLES.glob("*.toml") if "[design" in path.read_text())

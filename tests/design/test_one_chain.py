@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from magdesign.design import solve
-from magdesign.design.spec import load_spec, problem_from_spec
 from magdesign.scene import Loads, loads_from_spec, simulate, with_parameters
+from magdesign.spec.design import load_spec, problem_from_spec
 
 EXAMPLES = Path(__file__).parents[2] / "examples"
 DESIGNS = sorted(path.stem for path in EXAMPLES.glob("*.toml") if "[design" in path.read_text())

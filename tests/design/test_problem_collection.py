@@ -816,7 +816,7 @@ def test_default_design_with_the_remanence_free(tmp_path):
     the closest gap where the dome-Hall paper's Eq. 1 (written here) gives 4.8 mT at Br = 0.5 T."""
     from scipy.optimize import brentq
 
-    from magdesign.design.spec import load_spec, problem_from_spec
+    from magdesign.spec.design import load_spec, problem_from_spec
 
     text = (
         (EXAMPLES / "dome_hall.toml")

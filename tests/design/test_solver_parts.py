@@ -18,8 +18,8 @@ import pytest
 from magdesign._tracing import checked
 from magdesign.design import Limit, Objective, Problem, Target, Variable, solve, sweep
 from magdesign.design._linear import LUOrSVD
-from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.design.sweep import with_fixed
+from magdesign.spec.design import default_spec, problem_from_spec
 from magdesign.units import mm
 
 solver = importlib.import_module("magdesign.design.solve")

@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 
 from magdesign.cli import main
 from magdesign.design import SQP, Problem, Target, Variable, solve, sweep
-from magdesign.design.spec import default_spec, load_spec, problem_from_spec
+from magdesign.spec.design import default_spec, load_spec, problem_from_spec
 
 solver = importlib.import_module("magdesign.design.solve")
 batch = importlib.import_module("magdesign.design._sqp.batch")  # where the points go a point at a time

@@ -18,9 +18,10 @@ import pytest
 
 from magdesign.cli import main
 from magdesign.design import solve
-from magdesign.design.spec import default_spec
-from magdesign.design.tolerance import monte_carlo, perturb, robust_solve, sigmas, tolerance_problem_from_spec
+from magdesign.design.tolerance import monte_carlo, perturb, robust_solve, sigmas
 from magdesign.scene import loads_from_spec, outputs, scene_from_spec, with_parameters
+from magdesign.spec.design import default_spec
+from magdesign.spec.tolerance import tolerance_problem_from_spec
 from magdesign.units import SpecError
 
 LIMIT = 4.8e-3  # the default design's field_max upper bound (T)

@@ -11,10 +11,10 @@ import scipy.optimize
 from scene_helpers import example
 
 from magdesign.design import solve
-from magdesign.design.spec import problem_from_spec
 from magdesign.fields import film_angle
 from magdesign.inverse import film_forces
 from magdesign.scene import Loads, outputs, parameters, scene_from_spec, simulate, with_parameters
+from magdesign.spec.design import problem_from_spec
 from magdesign.units import SpecError
 
 REST = Loads(np.zeros(1))  # one unloaded point

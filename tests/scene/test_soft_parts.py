@@ -12,11 +12,11 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from magdesign.design import solve
-from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.fields import soft
 from magdesign.scene import scene_from_spec, with_parameters
-from magdesign.scene._spec import parameter_unit
 from magdesign.scene.pose import rotation
+from magdesign.spec.design import default_spec, problem_from_spec
+from magdesign.spec.table import parameter_unit
 from magdesign.units import MU0, SpecError
 
 PLATE = {

@@ -13,13 +13,14 @@ import tomllib
 
 import pytest
 
-from magdesign.design.spec import default_spec, problem_from_spec
-from magdesign.design.tolerance import EFFECT_INPUTS, tolerance_problem_from_spec
 from magdesign.scene import loads_from_spec, parameters, scene_from_spec
-from magdesign.scene._spec import Table
 from magdesign.scene.effects import EFFECT_NAMES
-from magdesign.spec.keys import KEYS, Key, UnlistedKeyError, listed, recording
+from magdesign.spec.checks import UnlistedKeyError, listed, recording
+from magdesign.spec.design import default_spec, problem_from_spec
+from magdesign.spec.keys import KEYS, Key
 from magdesign.spec.reference import markdown
+from magdesign.spec.table import Table
+from magdesign.spec.tolerance import EFFECT_INPUTS, tolerance_problem_from_spec
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "examples"
 # The sub-tables of [design.tolerances] that are named inputs rather than scene parameters.

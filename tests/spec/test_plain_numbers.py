@@ -13,9 +13,9 @@ import warnings
 import pytest
 
 from magdesign.cli import main
-from magdesign.design.spec import default_spec, problem_from_spec
 from magdesign.scene import loads_from_spec, scene_from_spec
-from magdesign.spec.keys import PlausibilityWarning
+from magdesign.spec.checks import PlausibilityWarning
+from magdesign.spec.design import default_spec, problem_from_spec
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "examples"
 

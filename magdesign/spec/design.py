@@ -29,24 +29,20 @@ import copy
 import datetime
 import importlib.metadata
 import importlib.resources
-import itertools
 import math
 import os
 import re
 import tomllib
-import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array
 
 from magdesign._files import replaced
 from magdesign.design.problem import Limit, Objective, Problem, Target, Variable, remember_source
-from magdesign.design.sweep import sweepable
 from magdesign.scene import (
     MECHANICS_CONVERGED,
     AbstractScene,
@@ -55,17 +51,16 @@ from magdesign.scene import (
     loads_from_spec,
     outputs,
     parameters,
-    scene_from_spec,
     with_parameters,
 )
-from magdesign.scene._spec import check_domain, check_keys, parameter_unit, sub_table
-from magdesign.scene.build import check_magnet_fits, check_wall
 from magdesign.scene.mechanics import Dome
-from magdesign.spec.keys import KEYS, check_output_number, fields, spec_name
-from magdesign.units import SpecError, convert, echo, parse, unit_factor, written_unit
+from magdesign.spec.checks import check_domain, check_output_number, fields
+from magdesign.spec.scene import check_magnet_fits, check_wall, scene_from_spec
+from magdesign.spec.table import check_keys, parameter_unit, sub_table
+from magdesign.units import SpecError, echo, parse, unit_factor, written_unit
 
 # The keys of an entry of each design table, from the key table (a target's tolerance is read
-# by magdesign.design.tolerance).
+# by magdesign.spec.tolerance).
 _VARIABLE_KEYS = fields("design.variables.*")
 _LIMIT_KEYS = fields("design.limits.*")
 _TARGET_KEYS = fields("design.targets.*")
@@ -255,50 +250,6 @@ def solved_spec(spec: dict, values: Mapping[str, float], units: Mapping[str, str
     return solved
 
 
-# The most values of one swept scene parameter (or rows of a list of points) whose scenes
-# are built and checked one by one, evenly spaced with both ends; beyond, the values between
-# are checked by their domain only (magdesign.cli reads each value as a spec value).
-SWEEP_CHECKS = 1000
-
-
-def _spread(items):
-    """At most :data:`SWEEP_CHECKS` of ``items``, evenly spaced, the first and last kept."""
-    if len(items) <= SWEEP_CHECKS:
-        return items
-    return [items[i] for i in np.unique(np.linspace(0, len(items) - 1, SWEEP_CHECKS).round().astype(int))]
-
-
-def check_swept(spec: dict, over: Mapping, grid: bool = True) -> None:
-    """SpecError unless each swept value of a scene parameter passes the checks the same
-    value passes in ``spec``: the scene is built with it in place (:func:`scene_from_spec`:
-    its domain and the scene's guards, a wall thinner than the dome, the magnet carried by
-    its part, sensors outside the magnet, ...).
-
-    ``over`` {key: (k,) SI values} of a sweep (targets' and limits' keys are not scene
-    parameters and pass); ``grid``: each key's values with the others at the spec's, and
-    every corner of the grid (the guards are linear in each parameter), else the lists
-    taken together row by row. At most :data:`SWEEP_CHECKS` values or rows are built.
-    """
-    keys = [key for key in over if spec_name(key) in KEYS and not key.startswith("design.")]
-    if not keys:
-        return
-    columns = {key: np.atleast_1d(np.asarray(over[key], np.float64)).tolist() for key in keys}
-    if grid:
-        rows = [{key: value} for key in keys for value in _spread(sorted(set(columns[key])))]
-        rows += [dict(zip(keys, corner)) for corner in itertools.product(*((min(c), max(c)) for c in columns.values()))]
-    else:
-        rows = _spread([dict(zip(keys, row)) for row in dict.fromkeys(zip(*columns.values()))])
-    for row in rows:
-        with warnings.catch_warnings():  # a plain number's warning was given where it was read
-            warnings.simplefilter("ignore")
-            try:
-                scene_from_spec(solved_spec(spec, row))
-            except SpecError as error:
-                shown = {key: _parameter_unit(spec, key)[1] for key in row}
-                swept = ", ".join(f"{key} = {convert(value, shown[key]):g} {shown[key]}" for key, value in row.items())
-                raise SpecError(f"swept {swept}: {error}") from None
-
-
 def target_tolerance(value, target: float, unit: str, where: str) -> float:
     """The allowed miss (SI, >= 0) of a target's ``tolerance`` as written: "%" of the
     target's value ``target`` (SI), or a quantity in the output's SI ``unit``; SpecError
@@ -322,29 +273,11 @@ def _named(where):
         raise SpecError(f"{where}: {error}") from None
 
 
-def _parameter_unit(spec, name):
+def parameter_units(spec, name):
     """(SI unit of parameter ``name``, the unit to show it in): the unit the scene spec writes
     the parameter in ("mm"), else its SI unit; "1" for a dimensionless one."""
     si = parameter_unit(name)
     return si, written_unit(stated_value(spec, name)) or si
-
-
-def input_units(spec: dict, problem: Problem, scene: AbstractScene) -> dict[str, tuple[str, str]]:
-    """{key: (SI unit, unit to show it in)} of every input a sweep of the spec's problem can
-    vary (:func:`magdesign.design.sweep.sweepable`): a target's value and a limit's bound in
-    their output's unit (as the spec writes them), a scene parameter in the unit the scene
-    spec writes it; "1" for a dimensionless one."""
-    units = {}
-    for key in sweepable(problem):
-        output, _, side = key.rpartition(".")
-        target = next((t for t in problem.targets if t.output == key), None)
-        limit = next((lim for lim in problem.limits if lim.output == output and side in lim.sides), None)
-        if target is not None or limit is not None:
-            si = scene.output_units.get(target.output if target is not None else output, "1")
-            units[key] = (si, (target or limit).unit or si)
-        else:
-            units[key] = _parameter_unit(spec, key)
-    return units
 
 
 def _si_unit(output_units, name):
@@ -511,7 +444,7 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
         if name not in known_parameters:
             raise SpecError(f"{where}: unknown parameter; expected one of {', '.join(sorted(known_parameters))}")
         check_keys(where, entry, _VARIABLE_KEYS)
-        unit, shown = _parameter_unit(spec, name)
+        unit, shown = parameter_units(spec, name)
         shown = written_unit(entry.get("lower")) or shown if shown == unit else shown
         values = {key: parse(entry[key], unit, key=f"{where}.{key}") for key in _VARIABLE_KEYS if key in entry}
         for key in ("lower", "upper"):

@@ -24,7 +24,6 @@ from magdesign.mechanics.dome import FIDELITIES as DOME_FIDELITIES
 from magdesign.mechanics.layer import FIDELITIES as LAYER_FIDELITIES
 from magdesign.mechanics.viscoelastic import DOME_HALL_POLE, DOME_HALL_SAMPLE_RATE
 from magdesign.scene import effects as fx
-from magdesign.scene._spec import Table, check_tables
 from magdesign.scene.film_scene import FilmScene
 from magdesign.scene.loads import loads_from_spec
 from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadout
@@ -32,8 +31,10 @@ from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions, rotation
 from magdesign.scene.solids import Solid, check_apart, solid
-from magdesign.spec.keys import KEYS, fields
+from magdesign.spec.checks import fields
+from magdesign.spec.keys import KEYS
 from magdesign.spec.sizes import check_fits
+from magdesign.spec.table import Table, check_tables
 from magdesign.units import SpecError, echo, uT
 
 # The scene's tables (all of the key table's but [design]) and the sensor parts by model.

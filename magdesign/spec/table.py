@@ -2,14 +2,13 @@
 
 Every key read is looked up in the one table of spec keys (:mod:`magdesign.spec.keys`),
 which gives its unit, default, physical domain and plausible range: a key that table does
-not list raises :class:`~magdesign.spec.keys.UnlistedKeyError` (a programming error). Every
+not list raises :class:`~magdesign.spec.checks.UnlistedKeyError` (a programming error). Every
 error in a spec is a :class:`~magdesign.units.SpecError` with a one-line message that names
 the dotted key and what was expected.
 """
 
-from magdesign.spec.keys import REQUIRED, check_read, listed, lookup
-from magdesign.spec.keys import PlausibilityWarning as PlausibilityWarning
-from magdesign.spec.keys import check_domain as check_domain
+from magdesign.spec.checks import check_domain, check_read, listed, lookup
+from magdesign.spec.keys import REQUIRED
 from magdesign.units import SpecError, echo, parse
 
 _MISSING = REQUIRED
@@ -35,7 +34,7 @@ class Table:
 
     def _get(self, key, default, kind=None, unit=None, options=None):
         """The raw value of ``key`` (``default`` when absent), read as the key table lists it
-        (:func:`magdesign.spec.keys.check_read`); SpecError when a required key is absent."""
+        (:func:`magdesign.spec.checks.check_read`); SpecError when a required key is absent."""
         check_read(lookup(f"{self.name}.{key}", kind), unit=unit, default=default, options=options)
         self._known.append(key)
         value = self._values.get(key, default)
