@@ -70,9 +70,6 @@ def safe_log(x, at_zero=0.0):
 DESIGN_RTOL = 1e-10
 # Default step tolerance in scaled variables: a converged step in a [0, 1] box.
 DESIGN_ATOL = 1e-13
-# A chip's saturation_ratio counts as clipping above 1 + CLIP_RTOL: a design held at its chip's
-# range reads 1 to the design solver's tolerance (DESIGN_RTOL), far below this.
-CLIP_RTOL = 1e-6
 # Values that spread by less than this fraction of their size are one number up to rounding:
 # reports and pictures show the number, not its noise (sweep maps, tolerance histograms).
 ROUNDING_SPREAD = 1e-9
@@ -84,12 +81,6 @@ ROUNDING_SPREAD = 1e-9
 # ramp stays a smooth (C-infinity) function in float64 for Newton and design gradients.
 CONTACT_SMOOTHING = 1e-5
 
-# Load below which a secant stiffness is evaluated at this floor instead, as a fraction
-# of the structure's own force scale (shear modulus x thickness^2): the secant
-# displacement / force is 0 / 0 at zero load; its limit, the tangent compliance at zero
-# load, is returned instead (the secant at 1e-6 of the force scale equals it to ~1e-6).
-ZERO_LOAD_FRACTION = 1e-6
-
 
 def smooth_ramp(x, width):
     """max(x, 0) smoothed over ``width``: width * softplus(x / width).
@@ -100,22 +91,6 @@ def smooth_ramp(x, width):
     with a positive slope, so a contact force built on it is never exactly zero.
     """
     return width * jax.nn.softplus(x / width)
-
-
-# Step tolerances of the least-squares solves of magdesign.inverse, whose unknowns are
-# scaled to order one there (displacements in units of the wanted resolution, fitted
-# constants as factors on their start values): far below any resolution asked for,
-# far above float64's rounding (1e-16) so that the solvers terminate.
-LSQ_RTOL = 1e-10
-LSQ_ATOL = 1e-10
-
-# Step of the central-difference Jacobian of magdesign.inverse's forward models, in the
-# solver's scaled unknowns (units of the wanted resolution, 1-100 um): the exact field
-# kernel's own derivative takes XLA tens of seconds to compile per copy, and a least-squares
-# solver holds several. At 1e-2 resolutions (0.01-1 um, against field length scales of
-# millimetres) the truncation error (step / length)^2 and the rounding error
-# (1e-16 / step, relative) both stay below 1e-8 of the Jacobian.
-FD_JACOBIAN_STEP = 1e-2
 
 
 # Solver thresholds of the axisymmetric dome (magdesign.mechanics._axisymmetric).
@@ -147,29 +122,12 @@ DOME_MIN_TRAVEL_FRACTION = 1e-3
 # good steps (a t/R = 0.005 dome at a travel of 0.002 t stalls 20x above its tolerance).
 # Near equilibrium Newton's step is exact to second order, so nothing is lost.
 DOME_ENERGY_RESOLUTION = 1e-9
+
 # First Levenberg shift (tried only when the tangent matrix is not positive definite,
 # e.g. while a load step passes through a buckling-like intermediate state), as a
 # fraction of each unknown's own diagonal entry (floored at this fraction of the largest);
 # it grows tenfold until a Cholesky succeeds.
 DOME_LEVENBERG_START = 1e-6
-
-# Step of the central-difference Jacobian of magdesign.inverse's calibration, in its
-# unknowns (factors on the constants' start values, order one): truncation (1e-12) and
-# rounding (1e-16 / 1e-6 = 1e-10) errors both far below the 1e-6 it is asked to recover.
-FD_CALIBRATION_STEP = 1e-6
-
-# The magnetic-suspension pole's moments level: the tilt step (rad) of its five-point central differences (the
-# spring coefficient and the field sensitivity at theta = 0). Truncation ~ step^4 times a
-# fifth / sixth tilt derivative: the GMR's field, 0.58 mm from the rod's tip, varies
-# fastest; at 0.02 rad its sensitivity is 1.7e-4 off, at 0.005 rad below 1e-6 (against
-# 0.0025 rad); rounding ~1e-15 / step^2 ~ 4e-11 for the spring coefficient.
-TILT_DIFFERENCE_STEP = 0.005
-# The five tilts (rad) of those central differences and their weights for the first and
-# the second derivative: f' = TILT_FIRST_DIFFERENCE . f(TILT_DIFFERENCE_ANGLES), alike f''.
-TILT_DIFFERENCE_ANGLES = tuple(TILT_DIFFERENCE_STEP * k for k in (-2.0, -1.0, 0.0, 1.0, 2.0))
-TILT_FIRST_DIFFERENCE = tuple(w / (12.0 * TILT_DIFFERENCE_STEP) for w in (1.0, -8.0, 0.0, 8.0, -1.0))
-TILT_SECOND_DIFFERENCE = tuple(w / (12.0 * TILT_DIFFERENCE_STEP**2) for w in (-1.0, 16.0, -30.0, 16.0, -1.0))
-
 
 # Smallest distance to a film's corner, as a fraction of the film's width: the field of a
 # finite film diverges logarithmically at its corners (where its face meets its side);

@@ -32,9 +32,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from _report import Report, arguments, progress
 
-from magdesign._numerics import TILT_DIFFERENCE_ANGLES, TILT_DIFFERENCE_STEP, TILT_SECOND_DIFFERENCE
 from magdesign.fields import cuboid, soft
 from magdesign.scene import loads_from_spec, outputs, parameters, scene_from_spec, with_parameters
+from magdesign.scene.pole_scene import TILT_DIFFERENCE_ANGLES, TILT_DIFFERENCE_STEP, TILT_SECOND_DIFFERENCE
 from magdesign.scene.pose import posed_cylinder, rotation
 from magdesign.units import MU0, deg, mm, mT
 

@@ -34,8 +34,8 @@ import jax.numpy as jnp
 import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from magdesign._numerics import FD_JACOBIAN_STEP, LSQ_ATOL, LSQ_RTOL, safe_div
-from magdesign.inverse._jacobian import difference_jacobian
+from magdesign._numerics import safe_div
+from magdesign.inverse._jacobian import FD_JACOBIAN_STEP, LSQ_ATOL, LSQ_RTOL, difference_jacobian
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 
 # Effects that the static, deterministic forward model of an inverse leaves out: those of the

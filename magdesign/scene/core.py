@@ -19,7 +19,6 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float, PRNGKeyArray
 
-from magdesign._numerics import CLIP_RTOL
 from magdesign.scene.effects import AbstractEffect, judged_saturation
 from magdesign.scene.loads import Loads
 from magdesign.transducers import to_chip
@@ -264,7 +263,10 @@ def _si_to_display(unit):
     return {"T": ("mT", 1e3), "V": ("mV", 1e3), "m": ("mm", 1e3), "N": ("N", 1.0)}.get(unit, (unit, 1.0))
 
 
-# The saturation_ratio above which the chip is said to clip (_numerics.CLIP_RTOL).
+# A chip's saturation_ratio counts as clipping above 1 + CLIP_RTOL: a design held at its chip's
+# range reads 1 to the design solver's tolerance (DESIGN_RTOL), far below this.
+CLIP_RTOL = 1e-6
+# The saturation_ratio above which the chip is said to clip.
 CLIPS_ABOVE = 1.0 + CLIP_RTOL
 
 

@@ -63,13 +63,24 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from magdesign._numerics import TILT_DIFFERENCE_ANGLES, TILT_FIRST_DIFFERENCE, TILT_SECOND_DIFFERENCE
 from magdesign.fields import cylinder, soft
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect
 from magdesign.scene.magnet_scene import SpinValveReadout
 from magdesign.scene.pose import SoftPart, rotation, soft_parts_field, soft_parts_frames
 from magdesign.units import MU0
+
+# The magnetic-suspension pole's moments level: the tilt step (rad) of its five-point central differences (the
+# spring coefficient and the field sensitivity at theta = 0). Truncation ~ step^4 times a
+# fifth / sixth tilt derivative: the GMR's field, 0.58 mm from the rod's tip, varies
+# fastest; at 0.02 rad its sensitivity is 1.7e-4 off, at 0.005 rad below 1e-6 (against
+# 0.0025 rad); rounding ~1e-15 / step^2 ~ 4e-11 for the spring coefficient.
+TILT_DIFFERENCE_STEP = 0.005
+# The five tilts (rad) of those central differences and their weights for the first and
+# the second derivative: f' = TILT_FIRST_DIFFERENCE . f(TILT_DIFFERENCE_ANGLES), alike f''.
+TILT_DIFFERENCE_ANGLES = tuple(TILT_DIFFERENCE_STEP * k for k in (-2.0, -1.0, 0.0, 1.0, 2.0))
+TILT_FIRST_DIFFERENCE = tuple(w / (12.0 * TILT_DIFFERENCE_STEP) for w in (1.0, -8.0, 0.0, 8.0, -1.0))
+TILT_SECOND_DIFFERENCE = tuple(w / (12.0 * TILT_DIFFERENCE_STEP**2) for w in (-1.0, 16.0, -30.0, 16.0, -1.0))
 
 
 def _charge_field(points, position, charge):
