@@ -1,11 +1,11 @@
 """Transducers: Hall, GMR / spin valve and inductor read-outs (SI: T, V, A, Ohm)."""
 
+from magdesign.frames import rotation_matrix as rotation_matrix
 from magdesign.transducers.gmr import SpinValve as SpinValve
 from magdesign.transducers.gmr import chip_frame as chip_frame
 from magdesign.transducers.gmr import inesc_spin_valve as inesc_spin_valve
 from magdesign.transducers.gmr import nve_aa003 as nve_aa003
 from magdesign.transducers.gmr import panasonic_meander as panasonic_meander
-from magdesign.transducers.gmr import rotation_matrix as rotation_matrix
 from magdesign.transducers.gmr import to_chip as to_chip
 from magdesign.transducers.hall import Hall3D as Hall3D
 from magdesign.transducers.hall import add_noise as add_noise
