@@ -14,7 +14,7 @@ component along a changes the resistance:
     R = R0 (1 + s * f(H_a + offset)),    V = I_bias R
 
 s the sensitivity (1/T; 0.72 %/mT is 7.2 /T), f the identity within the linear range
-and a smooth saturation beyond it (:func:`magdesign.transducers.hall.soft_clip`).
+and a smooth saturation beyond it (:func:`magdesign.transducers.signal.soft_clip`).
 """
 
 import equinox as eqx
@@ -23,7 +23,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from magdesign._validation import check_nonnegative, check_positive
 from magdesign.frames import rotation_matrix, to_body
-from magdesign.transducers.hall import soft_clip
+from magdesign.transducers.signal import soft_clip
 from magdesign.units import MU0, mT
 
 # The map of a field into the chips' frames, under the name the transducers' API gives it.
