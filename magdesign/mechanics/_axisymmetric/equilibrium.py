@@ -28,7 +28,8 @@ five-argument densities. This is the Hessian of :func:`potential` to rounding (t
 against ``jax.hessian``) at a tenth of the cost of differentiating the element energy,
 assembled straight into the blocks of its factor (:mod:`magdesign.mechanics._blocks`).
 
-Solution. Newton's method on the total potential with the exact tangent, factored as a
+Solution. Newton's method (the loop of :mod:`magdesign._newton`, which the saturating soft
+body's solve shares) on the total potential with the exact tangent, factored as a
 block tridiagonal matrix bordered by the plate travel (:mod:`magdesign.mechanics._blocks`), a Levenberg
 shift only where the tangent is not positive definite, and a backtracking line search on
 the potential (skipped where the decrease it would test is below the potential's rounding,
@@ -50,6 +51,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
+from magdesign import _newton
 from magdesign._numerics import (
     CONTACT_SMOOTHING,
     DOME_ENERGY_RESOLUTION,
@@ -71,9 +73,8 @@ CONTACT_PENALTY = 1000.0
 # Newton iterations of one solve at most: a force-held solve or a path's first step, and
 # any later step of a path (a step that needs more is retried at a quarter of its length).
 NEWTON_MAX_ITER = 40
-# Halvings of the step of one line search at most, and the Armijo fraction of the
-# predicted decrease that a step must achieve.
-LINE_SEARCH_MAX = 30
+# The Armijo fraction of the predicted decrease that a step must achieve (of the
+# potential's decrease, where the soft body's 1e-4 is of |residual|^2: a different merit).
 ARMIJO = 0.25
 # Index of the largest Levenberg shift tried (each ten times the previous one; see _factor).
 LEVENBERG_MAX = 12
@@ -315,56 +316,39 @@ def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
     def on_floor(size, previous):
         return (size > previous / 2) & (size <= DOME_ROUNDING_SLACK * tol)
 
-    def step(y, pi0, g, H, shift):
-        """(y less Newton's step for the gradient g and Hessian H, cut back until Armijo's
-        test holds, the potential there, whether the search gave up, the shift index);
-        pi0 the potential at y, NaN where not yet evaluated."""
-        F, used = _factor(mesh, H.restricted(mesh.layout, mask), jnp.maximum(shift - 1, 1))
-        dy = _blocks.solve(mesh.layout, F, g)
-        slope = jnp.dot(g, dy)
-
-        # The potential at alpha = 2^-k for k = -1 (y itself, where pi0 is not yet known),
-        # 0 (the full step, whatever the test), 1, 2, ... while Armijo's test fails: one
-        # evaluation of the potential in the compiled loop.
-        def alpha_of(k):
-            return jnp.where(k < 0, 0.0, jnp.ldexp(1.0, -jnp.maximum(k, 0)))
-
-        def search_cond(search):
-            k, trial, pi0 = search
-            resolved = slope > DOME_ENERGY_RESOLUTION * jnp.abs(pi0)
-            alpha = alpha_of(k)
-            return (k < 0) | (resolved & (trial > pi0 - ARMIJO * alpha * slope) & (alpha > 2.0**-LINE_SEARCH_MAX))
-
-        def shorter(search):
-            k, trial, pi0 = search
-            k = k + 1
-            value = energy(jnp.where(k < 0, y, y - alpha_of(k) * dy))
-            return k, jnp.where(k < 0, trial, value), jnp.where(k < 0, value, pi0)
-
-        start = (jnp.where(jnp.isnan(pi0), -2, -1), jnp.inf, pi0)
-        k, pi, _ = lax.while_loop(search_cond, shorter, start)
-        alpha = alpha_of(k)
-        # the hint: the shift a factor last needed (one that found none keeps it)
-        return y - alpha * dy, pi, alpha <= 2.0**-LINE_SEARCH_MAX, jnp.where((used > 0) & F.finite(), used, shift)
-
-    # Each turn linearises at y, then steps unless y is where the solve ends: one
-    # evaluation of the derivatives in the compiled loop (as many evaluations as with one
-    # before the loop and one after each step). pi0: the potential at y, carried from the
-    # line search that reached y (NaN at y0, where the first search evaluates it).
-    def body(carry):
-        y, pi0, previous, it, gave_up, shift, _ = carry
+    # Each turn linearises at y (one evaluation of the derivatives in the compiled loop),
+    # then steps unless y is where the solve ends; the potential at y is carried from the
+    # line search that reached y (at y0 the first search evaluates it: unknown).
+    def linearise(y, pi0, gave_up, state):
+        previous, it, shift, _, _, _ = state
         g, H = derivatives(mesh, y, params)
         reaction = g[-1]
         g = mask * (g - force * unit)
         size = jnp.max(jnp.abs(g))
         stopped = gave_up | on_floor(size, previous)
         done = ~(size > tol) | (it >= max_iter) | stopped  # a NaN residual stops it too
-        y, pi, gave_up, shift = lax.cond(done, lambda: (y, pi0, gave_up, shift), lambda: step(y, pi0, g, H, shift))
-        return y, pi, size, it + jnp.where(done, 0, 1), gave_up, shift, (done, stopped, H, reaction)
+        return done, (g, H), (size, it + jnp.where(done, 0, 1), shift, stopped, H, reaction)
 
-    unset = (False, False, _blocks.Blocks.zeros(mesh.layout), jnp.zeros(()))
-    carry = (y0, jnp.nan, jnp.inf, 0, False, jnp.asarray(shift), unset)
-    y, _, size, iterations, _, shift, (_, stopped, H, reaction) = lax.while_loop(lambda c: ~c[-1][0], body, carry)
+    def direction(y, linear, state):
+        """(Newton's step, the line search's Armijo test on the potential, skipped where
+        the decrease it would test is below the potential's rounding, the state with the
+        shift hint: the shift a factor last needed (one that found none keeps it))."""
+        g, H = linear
+        shift = state[2]
+        F, used = _factor(mesh, H.restricted(mesh.layout, mask), jnp.maximum(shift - 1, 1))
+        dy = _blocks.solve(mesh.layout, F, g)
+        slope = jnp.dot(g, dy)
+
+        def too_long(alpha, trial, pi0):
+            resolved = slope > DOME_ENERGY_RESOLUTION * jnp.abs(pi0)
+            return resolved & (trial > pi0 - ARMIJO * alpha * slope)
+
+        hint = jnp.where((used > 0) & F.finite(), used, shift)
+        return -dy, too_long, (*state[:2], hint, *state[3:])
+
+    state = (jnp.inf, 0, jnp.asarray(shift), False, _blocks.Blocks.zeros(mesh.layout), jnp.zeros(()))
+    y, _, state, _ = _newton.newton(linearise, direction, energy, y0, jnp.nan, state, known=False)
+    size, iterations, shift, stopped, H, reaction = state
     converged = (size <= tol) | (stopped & (size <= DOME_ROUNDING_SLACK * tol))
     return y, converged, iterations, H, reaction, shift
 
