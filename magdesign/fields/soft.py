@@ -32,12 +32,13 @@ Ni-Fe): each cell follows the isotropic, anhysteretic law
     J = chi h / sqrt(1 + (chi |h| / J_s)^2),          J = mu0 M, h = mu0 H (T),
 
 of initial slope chi and limit J_s (linear as J_s -> inf). The equations above then are
-nonlinear; they are solved by Newton's method with a backtracking line search from the
-linear answer pulled onto the law, judged on their residual (a solve that does not converge
-raises an error naming it), with derivatives by the implicit function theorem. Ours, not
-optimistix's: its Newton diverged here without a line search, and its Levenberg-Marquardt
-built each step's Jacobian by 3N forward passes (50 s for a 336-cell rod against 2 s with
-the law's Jacobian written out). The co-energy keeps its meaning: W' = sum_i V (J_i . B_ext,i
+nonlinear; they are solved by Newton's method with a backtracking line search
+(:mod:`magdesign._newton`, the loop of the dome's equilibrium too) from the linear answer
+pulled onto the law, judged on their residual (a solve that does not converge raises an
+error naming it), with derivatives by the implicit function theorem. Newton's step solves
+with the law's Jacobian written out (a 3 x 3 block per cell), not one built from 3N
+forward passes; a plain Newton step, without the line search, overshoots where the law's
+slope falls from chi to ~0. The co-energy keeps its meaning: W' = sum_i V (J_i . B_ext,i
 + (1/2) J_i . ((T - 1) J)_i - w(J_i)) / mu0 with the law's energy density
 w(J) = (J_s^2 / chi) (1 - sqrt(1 - |J|^2 / J_s^2)) (w'(J) = h), which equals
 (1/2) sum_i V M_i . B_ext,i for a linear body and is stationary in J at the solution, so its
@@ -60,11 +61,11 @@ import jax.scipy as jsp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from magdesign import _newton
 from magdesign._numerics import (
     SATURATION_ARMIJO,
     SATURATION_MAX_STEPS,
     SATURATION_RESIDUAL,
-    SATURATION_SHORTEST_STEP,
     float_array,
 )
 from magdesign._tracing import checked
@@ -427,31 +428,24 @@ def _saturated(matrix, external, chi, limit, start):
     derivatives by the implicit function theorem (the rule below), exact to any order."""
     args = (matrix, external, chi, limit)
 
-    def measured(polarization):
+    def measure(polarization):
         residual = _residual(polarization, *args)
-        return polarization, residual, jnp.sum(residual**2)
+        return residual, jnp.sum(residual**2)
 
-    def newton(state):
-        polarization, residual, value, steps = state
+    def linearise(polarization, measured, gave_up, steps):
+        residual, _ = measured
+        done = ~((jnp.max(jnp.abs(residual)) > SATURATION_RESIDUAL) & (steps < SATURATION_MAX_STEPS))
+        return done, residual, steps + jnp.where(done, 0, 1)
+
+    def direction(polarization, residual, steps):
         jacobian = _residual_jacobian(polarization, *args)
-        direction = -jnp.linalg.solve(jacobian, residual.reshape(-1)).reshape(residual.shape)
 
-        def too_long(trial):
-            fraction, (_, _, trial_value) = trial
-            return (trial_value > (1.0 - SATURATION_ARMIJO * fraction) * value) & (fraction > SATURATION_SHORTEST_STEP)
+        def too_long(fraction, trial, base):  # Armijo's test on |residual|^2
+            return trial[1] > (1.0 - SATURATION_ARMIJO * fraction) * base[1]
 
-        def halve(trial):
-            fraction = 0.5 * trial[0]
-            return fraction, measured(polarization + fraction * direction)
+        return -jnp.linalg.solve(jacobian, residual.reshape(-1)).reshape(residual.shape), too_long, steps
 
-        _, accepted = jax.lax.while_loop(too_long, halve, (1.0, measured(polarization + direction)))
-        return *accepted, steps + 1
-
-    def going(state):
-        _, residual, _, steps = state
-        return (jnp.max(jnp.abs(residual)) > SATURATION_RESIDUAL) & (steps < SATURATION_MAX_STEPS)
-
-    polarization, residual, _, _ = jax.lax.while_loop(going, newton, (*measured(start), 0))
+    polarization, (residual, _), _, _ = _newton.newton(linearise, direction, measure, start, measure(start), 0)
     return polarization, ~(jnp.max(jnp.abs(residual)) <= SATURATION_RESIDUAL)
 
 

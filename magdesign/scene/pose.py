@@ -1,15 +1,8 @@
-"""Poses: the rotation of sensor chips (the spin-valve paper, Eqs. 3-4) and of
-magnets, and the sensor grid.
+"""Poses: magnets and soft parts placed and turned in the scene, and the sensor grid.
 
-An orientation is three angles (alpha, beta, gamma) (rad); a vector v given in the scene
-(world) frame reads, in the body's own frame,
-
-    v_body = Rx(alpha) Ry(beta) Rz(gamma) v
-
-(:func:`magdesign.transducers.rotation_matrix`; a field is taken into the chips' frames by
-:func:`magdesign.transducers.to_chip`, the one home of that rotation). For a chip the body
-frame is (a, b, c), ``a`` its sensitive in-plane axis and ``c`` its normal; for a magnet it
-is the frame of :func:`magdesign.fields.cylinder` (centre at the origin, axis z).
+Orientations are three angles (alpha, beta, gamma) (rad), v_body = Rx(alpha) Ry(beta)
+Rz(gamma) v: :mod:`magdesign.frames` holds the rotation (:func:`rotation`, re-exported
+here for the scene's modules) and the maps into and out of a body's frame.
 """
 
 import equinox as eqx
@@ -18,13 +11,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign.fields import cylinder, soft
-from magdesign.transducers import rotation_matrix, to_chip
-
-
-def rotation(angles: Float[ArrayLike, "... 3"]) -> Float[Array, "... 3 3"]:
-    """Rx(alpha) Ry(beta) Rz(gamma) for ``angles = (alpha, beta, gamma)`` (rad), (..., 3, 3)."""
-    angles = jnp.asarray(angles, dtype=float)
-    return rotation_matrix(angles[..., 0], angles[..., 1], angles[..., 2])
+from magdesign.frames import from_body, rotation, to_body
 
 
 def posed_cylinder(
@@ -45,8 +32,8 @@ def posed_cylinder(
     if angles is None:
         return cylinder(local, radius=radius, height=height, polarization=polarization, fidelity=fidelity)
     matrix = rotation(angles)
-    field = cylinder(to_chip(matrix, local), radius=radius, height=height, polarization=polarization, fidelity=fidelity)
-    return jnp.einsum("ji,...j->...i", matrix, field)
+    field = cylinder(to_body(matrix, local), radius=radius, height=height, polarization=polarization, fidelity=fidelity)
+    return from_body(matrix, field)
 
 
 class Magnet(eqx.Module):
@@ -120,7 +107,7 @@ def soft_parts_frames(parts, displacement, magnets):
     matrices = [rotation(part.angles) for part in parts]
     cells = [centre + body.centres @ matrix for body, centre, matrix in zip(bodies, centres, matrices)]
     at_cells = jnp.split(magnets(jnp.concatenate(cells)), np.cumsum([len(c) for c in cells])[:-1])
-    return bodies, centres, matrices, [to_chip(matrix, field) for matrix, field in zip(matrices, at_cells)]
+    return bodies, centres, matrices, [to_body(matrix, field) for matrix, field in zip(matrices, at_cells)]
 
 
 def soft_parts_field(parts, points, displacement, magnets):
@@ -131,7 +118,7 @@ def soft_parts_field(parts, points, displacement, magnets):
     magnetizations = soft.coupled_magnetization(bodies, centres, matrices, externals)
     points = jnp.asarray(points)
     return sum(
-        jnp.einsum("ji,...j->...i", matrix, soft.field(body, magnetization, to_chip(matrix, points - centre)))
+        from_body(matrix, soft.field(body, magnetization, to_body(matrix, points - centre)))
         for body, magnetization, centre, matrix in zip(bodies, magnetizations, centres, matrices)
     )
 

@@ -7,13 +7,14 @@ spin-valve paper, Eqs. 3-4):
 
     H_sensor = Rx(alpha) Ry(beta) Rz(gamma) H
 
-with the right-handed rotation matrices of Eq. 4 (:func:`chip_frame`). Only the
+with the right-handed rotation matrices of Eq. 4 (:func:`chip_frame`; the rotation and
+the maps into and out of a chip's frame live in :mod:`magdesign.frames`). Only the
 component along a changes the resistance:
 
     R = R0 (1 + s * f(H_a + offset)),    V = I_bias R
 
 s the sensitivity (1/T; 0.72 %/mT is 7.2 /T), f the identity within the linear range
-and a smooth saturation beyond it (:func:`magdesign.transducers.hall.soft_clip`).
+and a smooth saturation beyond it (:func:`magdesign.transducers.signal.soft_clip`).
 """
 
 import equinox as eqx
@@ -21,34 +22,12 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign._validation import check_nonnegative, check_positive
-from magdesign.transducers.hall import soft_clip
+from magdesign.frames import rotation_matrix, to_body
+from magdesign.transducers.signal import soft_clip
 from magdesign.units import MU0, mT
 
-
-def rotation_matrix(
-    alpha: Float[ArrayLike, "..."], beta: Float[ArrayLike, "..."], gamma: Float[ArrayLike, "..."]
-) -> Float[Array, "... 3 3"]:
-    """Rx(alpha) Ry(beta) Rz(gamma) (the spin-valve paper's Eq. 4), angles in rad, broadcast together."""
-    alpha, beta, gamma = jnp.broadcast_arrays(*(jnp.asarray(a, dtype=float) for a in (alpha, beta, gamma)))
-    one, zero = jnp.ones_like(alpha), jnp.zeros_like(alpha)
-
-    def matrix(rows):
-        return jnp.stack([jnp.stack(row, axis=-1) for row in rows], axis=-2)
-
-    ca, sa = jnp.cos(alpha), jnp.sin(alpha)
-    cb, sb = jnp.cos(beta), jnp.sin(beta)
-    cg, sg = jnp.cos(gamma), jnp.sin(gamma)
-    rx = matrix([[one, zero, zero], [zero, ca, -sa], [zero, sa, ca]])
-    ry = matrix([[cb, zero, sb], [zero, one, zero], [-sb, zero, cb]])
-    rz = matrix([[cg, -sg, zero], [sg, cg, zero], [zero, zero, one]])
-    return rx @ ry @ rz
-
-
-def to_chip(rotations: Float[ArrayLike, "... 3 3"], field: Float[ArrayLike, "... 3"]) -> Float[Array, "... 3"]:
-    """The field (any unit) expressed in each chip's frame: ``rotations @ field``, the
-    rotations (..., 3, 3) broadcast against the field (..., 3) (one per chip: (S, 3, 3)
-    against (n, S, 3))."""
-    return jnp.einsum("...ij,...j->...i", rotations, field)
+# The map of a field into the chips' frames, under the name the transducers' API gives it.
+to_chip = to_body
 
 
 def chip_frame(

@@ -451,7 +451,7 @@ def test_the_tangent_is_traced_once_for_a_compliance_and_its_second_derivatives(
         traced.append(with_hessian)
         return element_derivatives(*args, with_hessian=with_hessian)
 
-    monkeypatch.setattr(_axisymmetric, "_element_derivatives", counted)
+    monkeypatch.setattr(_axisymmetric.equilibrium, "_element_derivatives", counted)
 
     def compliance(t):
         return dome_compliance(
