@@ -36,6 +36,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from magdesign.design import solve, sweep
+from magdesign.design._sqp.jet import _jet, problem_arrays
+from magdesign.design._sqp.step import _no_slack_rows, subproblem, subproblem_box
 from magdesign.mechanics import MooneyRivlin
 from magdesign.spec.design import default_spec, problem_from_spec
 from magdesign.units import mm, mT
@@ -43,7 +45,6 @@ from magdesign.units import mm, mT
 sys.path.insert(0, "tests/design")
 from helpers_problems import HOCK_SCHITTKOWSKI  # noqa: E402
 
-solver = importlib.import_module("magdesign.design.solve")
 qp_module = importlib.import_module("magdesign.design._qp")
 
 BATCH = 10_000
@@ -90,15 +91,16 @@ print(time.perf_counter() - began, result.status)
 # persistent cache: prints (stage, wall s, CPU s) per line, then the compiled program's
 # fusions and instructions.
 FIRST_CALL_STAGES = """
-import importlib, re, resource, time
+import re, resource, time
+from magdesign._numerics import DESIGN_ATOL, DESIGN_RTOL
 from magdesign._tracing import errors_as_nan, gc_paused
+from magdesign.design._sqp.program import _compiled, _host, _structure, settings_of
 from magdesign.spec.design import default_spec, problem_from_spec
-solver = importlib.import_module("magdesign.design.solve")
 problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
-settings = solver.settings_of(solver.DESIGN_RTOL, solver.DESIGN_ATOL, 100)
-key, arrays = solver._structure(problem, settings)
-host = solver._host(problem)
-program = solver._compiled(key, False)
+settings = settings_of(DESIGN_RTOL, DESIGN_ATOL, 100)
+key, arrays = _structure(problem, settings)
+host = _host(problem)
+program = _compiled(key, False)
 clock = lambda: (time.perf_counter(), sum(resource.getrusage(resource.RUSAGE_SELF)[:2]))
 with errors_as_nan(), gc_paused():
     began = clock()
@@ -204,12 +206,12 @@ def design_rows(skip_axisymmetric):
 
 def first_subproblem(problem):
     """The solver's QP at the start of ``problem`` (scaled as the solver scales it)."""
-    lower, upper, scale, start, theta = solver.problem_arrays(problem, np)
+    lower, upper, scale, start, theta = problem_arrays(problem, np)
     y0, y_max = (start - lower) / scale, (upper - lower) / scale
-    jet = solver._jet(problem, jnp.asarray(y0), jnp.asarray(theta))
+    jet = _jet(problem, jnp.asarray(y0), jnp.asarray(theta))
     weight = 1.0 / float(jnp.linalg.norm(jet.J[0])) if problem.objective is not None else 1.0
     m = jet.v.shape[0] - 1
-    return solver.subproblem(
+    return subproblem(
         jet,
         jnp.asarray(y0),
         jnp.asarray(y_max),
@@ -265,7 +267,7 @@ def qp_rows():
         # point method only where they fail (iterations > 0).
         n, n_targets = len(problem.variables), len(problem.targets)
         n_limits = (G.shape[0] - 2 * n - 2 * n_targets) // 2
-        guess, box = solver._no_slack_rows(n, n_targets, n_limits), solver.subproblem_box(n, n_targets, n_limits)
+        guess, box = _no_slack_rows(n, n_targets, n_limits), subproblem_box(n, n_targets, n_limits)
         guessed = jax.jit(lambda *args: qp_module.solve_qp(*args, guess=guess, box=box))
         solution = guessed(Q, q, A, b, G, h)
         seconds = median_time(lambda: guessed(Q, q, A, b, G, h))

@@ -4,8 +4,9 @@ runs) for many points of a problem.
 
 The solver itself, sequential quadratic programming with a Newton polish and implicit
 derivatives, lives in :mod:`magdesign.design._sqp` (its docstring says what it does, its
-README how the pieces fit). This module also re-exports the solver's parts that tests
-and benchmarks use.
+README how the pieces fit). This module also re-exports what the sweep and the CLI take
+from the package: :func:`solve_batch`, :func:`batch_inputs`, :func:`settings_of`,
+:func:`usable_cores` and :class:`SQP`.
 """
 
 import time
@@ -13,40 +14,14 @@ import time
 import numpy as np
 
 from magdesign._numerics import DESIGN_ATOL, DESIGN_RTOL
-from magdesign.design._sqp.batch import _iterative as _iterative
-from magdesign.design._sqp.batch import _one_by_one as _one_by_one
 from magdesign.design._sqp.batch import solve_batch as solve_batch
 from magdesign.design._sqp.batch import usable_cores as usable_cores
-from magdesign.design._sqp.core import CoreSolution as CoreSolution
-from magdesign.design._sqp.core import _core as _core
-from magdesign.design._sqp.jet import Jet as Jet
-from magdesign.design._sqp.jet import Settings as Settings
-from magdesign.design._sqp.jet import _jet as _jet
-from magdesign.design._sqp.jet import _values as _values
-from magdesign.design._sqp.jet import problem_arrays as problem_arrays
-from magdesign.design._sqp.loop import CONVERGED as CONVERGED
-from magdesign.design._sqp.loop import NONFINITE_START as NONFINITE_START
-from magdesign.design._sqp.loop import _search_and_polish as _search_and_polish
-from magdesign.design._sqp.polish import _KKT as _KKT
-from magdesign.design._sqp.polish import _Active as _Active
-from magdesign.design._sqp.polish import _Feasibility as _Feasibility
-from magdesign.design._sqp.polish import _linearised as _linearised
-from magdesign.design._sqp.polish import _newton as _newton
-from magdesign.design._sqp.polish import _newton_step as _newton_step
-from magdesign.design._sqp.polish import _polish_at as _polish_at
-from magdesign.design._sqp.program import _compiled as _compiled
 from magdesign.design._sqp.program import _host, _run, _start, _unpack
-from magdesign.design._sqp.program import _structure as _structure
 from magdesign.design._sqp.program import batch_inputs as batch_inputs
 from magdesign.design._sqp.program import settings_of as settings_of
 from magdesign.design._sqp.sqp import SQP as SQP
-from magdesign.design._sqp.step import _no_slack_rows as _no_slack_rows
-from magdesign.design._sqp.step import subproblem as subproblem
-from magdesign.design._sqp.step import subproblem_box as subproblem_box
 from magdesign.design.problem import Problem
 from magdesign.design.report import DesignResult, DesignSweep
-from magdesign.design.status import STATUS_NAMES as STATUS_NAMES
-from magdesign.design.status import DesignStatus as DesignStatus
 
 
 def solve(

@@ -18,11 +18,19 @@ import pytest
 from magdesign._tracing import checked
 from magdesign.design import Limit, Objective, Problem, Target, Variable, solve, sweep
 from magdesign.design._linear import LUOrSVD
+from magdesign.design._sqp.core import CoreSolution, _core
+from magdesign.design._sqp.jet import Jet, _jet, _values, problem_arrays
+from magdesign.design._sqp.loop import run
+from magdesign.design._sqp.polish import _KKT, _Active, _Feasibility, _linearised, _newton, _newton_step, _polish_at
+from magdesign.design._sqp.program import _compiled, _host, _start, _structure, settings_of
+from magdesign.design._sqp.search import CONVERGED, NONFINITE_START
+from magdesign.design._sqp.sqp import SQP
+from magdesign.design._sqp.step import _no_slack_rows, subproblem, subproblem_box
+from magdesign.design.status import STATUS_NAMES
 from magdesign.design.sweep import with_fixed
 from magdesign.spec.design import default_spec, problem_from_spec
 from magdesign.units import mm
 
-solver = importlib.import_module("magdesign.design.solve")
 qp = importlib.import_module("magdesign.design._qp")
 
 
@@ -59,28 +67,28 @@ def test_polish_equations_and_their_derivatives_match_plain_forward_mode(objecti
         objective=Objective("f", "min") if objective else None,
         fixed={"a": 1.3},
     )
-    theta = jnp.asarray(solver.problem_arrays(problem, np)[4])
-    active = solver._Active(jnp.array([True, False]), jnp.array([False, False]), jnp.array([False, True]))
+    theta = jnp.asarray(problem_arrays(problem, np)[4])
+    active = _Active(jnp.array([True, False]), jnp.array([False, False]), jnp.array([False, True]))
     held, y_max = jnp.array([True, True, False]), jnp.array([1.0, 1.0])
     if objective:
-        equations = solver._KKT(problem, jnp.asarray(0.7), active, held, y_max)
+        equations = _KKT(problem, jnp.asarray(0.7), active, held, y_max)
         z = jnp.array([0.3, 0.6, 0.4, -0.2, 0.9])
     else:
-        equations = solver._Feasibility(problem, active, held, y_max)
+        equations = _Feasibility(problem, active, held, y_max)
         z = jnp.array([0.3, 0.6])
 
     def plain(z, theta):  # the equations from the model's values and their Jacobian by plain forward mode
-        v, outputs = solver._values(problem, z[:2], theta)
-        J = jax.jacfwd(lambda y: solver._values(problem, y, theta)[0])(z[:2])
-        return equations.rows(z, solver.Jet(v, J, jnp.zeros((*J.shape, 2)), outputs))
+        v, outputs = _values(problem, z[:2], theta)
+        J = jax.jacfwd(lambda y: _values(problem, y, theta)[0])(z[:2])
+        return equations.rows(z, Jet(v, J, jnp.zeros((*J.shape, 2)), outputs))
 
-    jet = solver._jet(problem, z[:2], theta)
+    jet = _jet(problem, z[:2], theta)
     np.testing.assert_allclose(equations.rows(z, jet), plain(z, theta), rtol=1e-15)
     in_z = jax.vmap(lambda dz: equations.tangent(jet, z, dz), out_axes=1)(jnp.eye(z.size))
     np.testing.assert_allclose(in_z, jax.jacfwd(plain)(z, theta), rtol=1e-13, atol=1e-13)
     # The equations to first order about z, as the implicit derivatives see them: in the
     # root from the jet, in theta through the model's values (and Jacobian) again.
-    linearised = lambda root, theta: solver._linearised(root, None, (equations, theta, z, jet, jnp.asarray(True)))  # noqa: E731
+    linearised = lambda root, theta: _linearised(root, None, (equations, theta, z, jet, jnp.asarray(True)))  # noqa: E731
     for argnum in (0, 1):
         expected = jax.jacfwd(plain, argnums=argnum)(z, theta)
         np.testing.assert_allclose(jax.jacfwd(linearised, argnums=argnum)(z, theta), expected, rtol=1e-13, atol=1e-13)
@@ -89,8 +97,8 @@ def test_polish_equations_and_their_derivatives_match_plain_forward_mode(objecti
     # minimum-norm solve with the plain equations' forward-mode Jacobian (singular at
     # this point with an objective, not square without).
     expected = z - np.linalg.pinv(jax.jacfwd(plain)(z, theta), rcond=1e-12) @ plain(z, theta)
-    newton = solver._newton(solver.settings_of(1e-10, 1e-13, 10))
-    stepped = solver._newton_step(equations, newton, solver._polish_at(equations, z, jet, newton), jet, 10)
+    newton = _newton(settings_of(1e-10, 1e-13, 10))
+    stepped = _newton_step(equations, newton, _polish_at(equations, z, jet, newton), jet, 10)
     np.testing.assert_allclose(stepped.z, expected, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(stepped.evaluated, z)
     np.testing.assert_allclose(stepped.newton.f, plain(z, theta), rtol=1e-15)
@@ -116,18 +124,18 @@ def test_polish_ends_with_the_residual_and_jet_of_the_point_it_returns():
     jet from another point would show."""
     problem = _r2_problem()
     feasibility = Problem(problem.model, problem.variables, targets=problem.targets)
-    settings = solver.settings_of(1e-10, 1e-13, 2)
+    settings = settings_of(1e-10, 1e-13, 2)
     y_max = jnp.array([1.0, 1.0])  # scaled variables: (x + 3) / 6
-    y0, theta = jnp.array([0.35, 0.2]), jnp.asarray(solver.problem_arrays(problem, np)[4])
+    y0, theta = jnp.array([0.35, 0.2]), jnp.asarray(problem_arrays(problem, np)[4])
     for p in (problem, feasibility):
-        loop = jax.jit(lambda y0: solver._search_and_polish(p, y0, theta, settings, y_max))(y0)
+        loop = jax.jit(lambda y0: run(p, y0, theta, settings, y_max))(y0)
         polish, search = loop.polish, loop.search
         assert int(search.steps) == 2 and int(polish.newton.step) == 2
         z = polish.evaluated
         y = z[:2]
         # the model at y, by plain forward mode
-        v, outputs = solver._values(p, y, theta)
-        J = jax.jacfwd(lambda y: solver._values(p, y, theta)[0])(y)
+        v, outputs = _values(p, y, theta)
+        J = jax.jacfwd(lambda y: _values(p, y, theta)[0])(y)
         x = -3.0 + 6.0 * y
         if p.objective is not None:
             r = jnp.concatenate([search.weight * J[0] + J[1:].T @ z[2:], v[1:]])
@@ -165,16 +173,12 @@ def test_the_model_is_evaluated_once_a_trip_and_the_polish_starts_from_the_searc
         fixed={"a": 0.1},
         objective=problem.objective if objective else None,
     )
-    lower, upper, scale, start, theta = (jnp.asarray(a) for a in solver.problem_arrays(problem, np))
-    run = jax.jit(
-        lambda y0: solver._search_and_polish(
-            problem, y0, theta, solver.settings_of(1e-10, 1e-13, 100), (upper - lower) / scale
-        )
-    )
-    jax.block_until_ready(run((start - lower) / scale))
+    lower, upper, scale, start, theta = (jnp.asarray(a) for a in problem_arrays(problem, np))
+    solved = jax.jit(lambda y0: run(problem, y0, theta, settings_of(1e-10, 1e-13, 100), (upper - lower) / scale))
+    jax.block_until_ready(solved((start - lower) / scale))
     calls.clear()
-    loop = jax.block_until_ready(run((start - lower) / scale))
-    assert int(loop.search.phase) == solver.CONVERGED
+    loop = jax.block_until_ready(solved((start - lower) / scale))
+    assert int(loop.search.phase) == CONVERGED
     # with an objective two Newton steps (one evaluation); without, the search's point
     # already solves the feasibility equations, and Newton's first step confirms it
     assert int(loop.polish.newton.step) == (2 if objective else 1)
@@ -194,19 +198,19 @@ def test_lanes_of_a_batch_that_end_on_different_trips_equal_their_own_solves():
 
     problem = _r2_problem(model)
     problem = Problem(model, problem.variables, targets=problem.targets, objective=problem.objective, fixed={"b": 1.0})
-    lower, upper, scale, _, theta = solver.problem_arrays(problem, np)
-    settings = solver.settings_of(1e-10, 1e-13, 100)
+    lower, upper, scale, _, theta = problem_arrays(problem, np)
+    settings = settings_of(1e-10, 1e-13, 100)
     starts = (np.array([[-0.9, -1.8], [2.5, 2.5], [0.3, -0.2], [-0.9, -1.8]]) - lower) / scale
     thetas = np.array([[2.0, 1.0], [3.0, 1.0], [1.0, 2.0], [2.0, -1.0]])  # (target r2, b); b < 0: NaN
-    core = lambda y0, theta: solver._core(problem, y0, theta, settings)  # noqa: E731
+    core = lambda y0, theta: _core(problem, y0, theta, settings)  # noqa: E731
     batched = jax.jit(jax.vmap(core))(jnp.asarray(starts), jnp.asarray(thetas))
-    statuses = [solver.STATUS_NAMES[int(k)] for k in batched.status]
+    statuses = [STATUS_NAMES[int(k)] for k in batched.status]
     assert statuses == ["successful"] * 3 + ["nonfinite"]
     assert len(set(np.asarray(batched.steps[:3]).tolist())) > 1  # the lanes end on different trips
     one = jax.jit(core)
     for lane in range(4):
         alone = one(jnp.asarray(starts[lane]), jnp.asarray(thetas[lane]))
-        for name, got, expected in zip(solver.CoreSolution._fields, batched, alone):
+        for name, got, expected in zip(CoreSolution._fields, batched, alone):
             np.testing.assert_allclose(
                 np.asarray(got[lane], float),
                 np.asarray(expected, float),
@@ -215,10 +219,10 @@ def test_lanes_of_a_batch_that_end_on_different_trips_equal_their_own_solves():
                 err_msg=f"lane {lane}: {name}",
             )
     y_max = jnp.asarray((upper - lower) / scale)
-    loop = jax.jit(lambda y0, theta: solver._search_and_polish(problem, y0, theta, settings, y_max))(
+    loop = jax.jit(lambda y0, theta: run(problem, y0, theta, settings, y_max))(
         jnp.asarray(starts[3]), jnp.asarray(thetas[3])
     )
-    assert int(loop.search.phase) == solver.NONFINITE_START and int(loop.search.steps) == 1
+    assert int(loop.search.phase) == NONFINITE_START and int(loop.search.steps) == 1
     assert int(loop.polish.newton.step) == 1 and not np.all(np.isfinite(loop.polish.newton.f))
     np.testing.assert_array_equal(loop.polish.evaluated[:2], starts[3])
 
@@ -234,17 +238,17 @@ def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
     limits = [limit for limit in problem.limits if limit.output not in ("embed", "reach")]
     problem = Problem(problem.model, problem.variables, problem.targets, limits, problem.objective)
     problem = with_fixed(problem, ["mechanics.outer_radius"])
-    lower, upper, scale, start, theta = solver.problem_arrays(problem, np)
+    lower, upper, scale, start, theta = problem_arrays(problem, np)
     theta = theta.copy()
     theta[0], theta[-1] = np.linspace(0.25, 0.4, 100)[5] * mm, 6.0 * mm
     y0, y_max = jnp.asarray((start - lower) / scale), jnp.asarray((upper - lower) / scale)
-    jet = solver._jet(problem, y0, jnp.asarray(theta))
+    jet = _jet(problem, y0, jnp.asarray(theta))
     n, n_targets, m = y0.shape[0], len(problem.targets), jet.v.shape[0] - 1
-    parts = solver.subproblem(jet, y0, y_max, jnp.zeros(m), 1.0 / jnp.linalg.norm(jet.J[0]), n_targets, True)
-    guess = solver._no_slack_rows(n, n_targets, m - n_targets)
+    parts = subproblem(jet, y0, y_max, jnp.zeros(m), 1.0 / jnp.linalg.norm(jet.J[0]), n_targets, True)
+    guess = _no_slack_rows(n, n_targets, m - n_targets)
     reference = qp.solve_qp(*parts)
     assert int(reference.iterations) > 0
-    for box in (None, solver.subproblem_box(n, n_targets, m - n_targets)):
+    for box in (None, subproblem_box(n, n_targets, m - n_targets)):
         guessed = qp.solve_qp(*parts, guess=guess, box=box)
         assert bool(guessed.converged) and int(guessed.iterations) == 0
         np.testing.assert_allclose(guessed.w, reference.w, rtol=0, atol=1e-9)
@@ -391,7 +395,7 @@ def _raising_problem(check):
         return {"f": check(v["x"] ** 2, v["x"] > 0.5, "x above 0.5"), "g": v["x"]}
 
     problem = Problem(model, [Variable("x", -1.0, 1.0)], targets=[Target("g", 0.8)], objective=Objective("f", "min"))
-    return problem, jnp.asarray([0.9]), jnp.asarray(solver.problem_arrays(problem, np)[4])
+    return problem, jnp.asarray([0.9]), jnp.asarray(problem_arrays(problem, np)[4])
 
 
 @pytest.mark.parametrize("solve_first", [False, True])
@@ -406,7 +410,7 @@ def test_a_model_traced_outside_the_solver_keeps_raising_its_errors_and_inside_g
             assert solve(problem).status == "infeasible_target"
         else:
             with pytest.raises(Exception, match="x above 0.5"):
-                jax.block_until_ready(solver._jet(problem, y0, theta))
+                jax.block_until_ready(_jet(problem, y0, theta))
 
 
 def test_a_models_own_runtime_error_reaches_the_user():
@@ -471,10 +475,10 @@ def test_the_solver_takes_its_thresholds_from_the_sqp_it_is_given():
     assert left.status == "successful"
     assert left.parameters["x"] == pytest.approx(0.5, abs=1e-9)
     assert min(left.parameters["y"], 1.0 - left.parameters["y"]) == pytest.approx(0.0, abs=1e-12)
-    assert solve(problem, solver=solver.SQP(escapes=0)).status == "not_a_minimum"
-    key = lambda sqp: solver._structure(problem, solver.settings_of(1e-10, 1e-13, 100, sqp))[0]  # noqa: E731
-    assert key(solver.SQP(point_seconds=0.0, chain=2)) == key(solver.SQP())
-    assert key(solver.SQP(escapes=0)) != key(solver.SQP())
+    assert solve(problem, solver=SQP(escapes=0)).status == "not_a_minimum"
+    key = lambda sqp: _structure(problem, settings_of(1e-10, 1e-13, 100, sqp))[0]  # noqa: E731
+    assert key(SQP(point_seconds=0.0, chain=2)) == key(SQP())
+    assert key(SQP(escapes=0)) != key(SQP())
 
 
 def test_the_solvers_program_calls_no_python():
@@ -482,8 +486,6 @@ def test_the_solvers_program_calls_no_python():
     is one): JAX's persistent cache keeps no program that calls back to Python, and the
     command would compile the solver afresh on every run. Traced here outside
     ``errors_as_nan``, so that a library's own check would show."""
-    from magdesign.design._sqp.program import _compiled, _host, _start, _structure, settings_of
-
     problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
     settings = settings_of(1e-8, 1e-8, 20)
     key, arrays = _structure(problem, settings)

@@ -20,7 +20,6 @@ from magdesign.cli import main
 from magdesign.design import SQP, Problem, Target, Variable, solve, sweep
 from magdesign.spec.design import default_spec, load_spec, problem_from_spec
 
-solver = importlib.import_module("magdesign.design.solve")
 batch = importlib.import_module("magdesign.design._sqp.batch")  # where the points go a point at a time
 
 mm, mT = 1e-3, 1e-3
@@ -250,7 +249,7 @@ def test_a_model_with_loops_is_swept_a_point_at_a_time_where_a_point_is_slow(mon
     single solve from that start (the first from the variables' own start), or, without
     continuation, from its own start.
     Either way the optimum and its derivatives are the closed form's."""
-    assert solver._iterative(cubic_problem()) and not solver._iterative(product_problem())
+    assert batch._iterative(cubic_problem()) and not batch._iterative(product_problem())
     sqp = SQP(point_seconds=0.0 if slow else np.inf)
     calls = []
     one_by_one = batch._one_by_one

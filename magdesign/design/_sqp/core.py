@@ -1,5 +1,6 @@
-"""The core: the loop, the polish's answer checked against the search's, the implicit
-derivatives and the status, as one jitted, vmappable function."""
+"""The core: the solver's loop (:mod:`magdesign.design._sqp.loop`) and its
+:func:`postprocess`, which checks the polish's answer against the search's and gives the
+implicit derivatives and the status, as one jitted, vmappable function."""
 
 from typing import NamedTuple
 
@@ -8,8 +9,9 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
 from magdesign.design._sqp.jet import Settings, _lagrangian_hessian, problem_arrays
-from magdesign.design._sqp.loop import CONVERGED, NONFINITE_START, NOT_MINIMUM, _search_and_polish
+from magdesign.design._sqp.loop import SQPState, run
 from magdesign.design._sqp.polish import _equations, _implicit_derivatives, _solvable
+from magdesign.design._sqp.search import CONVERGED, NONFINITE_START, NOT_MINIMUM
 from magdesign.design.problem import Problem
 from magdesign.design.status import status_code
 
@@ -33,14 +35,21 @@ class CoreSolution(NamedTuple):
 
 
 def _core(problem: Problem, y0, theta, settings: Settings) -> CoreSolution:
-    """The search, the polish, the implicit derivatives and the status."""
+    """The solver from y0 (n,) (scaled) with theta (p,) (SI): its loop (:func:`init`, then
+    :func:`step` until :func:`terminate`: :func:`run`), then :func:`postprocess`."""
+    lower, upper, scale, _, _ = problem_arrays(problem)
+    state = run(problem, jax.lax.stop_gradient(y0), theta, settings, (upper - lower) / scale)
+    return postprocess(problem, theta, settings, state)
+
+
+def postprocess(problem: Problem, theta, settings: Settings, state: SQPState) -> CoreSolution:
+    """The solution from the loop's last state: the polished root where it stands (else
+    the search's point), the implicit derivatives in theta (p,) there, and the status."""
     n, n_targets = len(problem.variables), len(problem.targets)
     lower, upper, scale, _, _ = problem_arrays(problem)
     y_max = (upper - lower) / scale
     tol, sqp = settings.rtol, settings.sqp
-
-    loop = _search_and_polish(problem, jax.lax.stop_gradient(y0), theta, settings, y_max)
-    search, polish = loop.search, loop.polish
+    search, polish = state.search, state.polish
     # the polish's answer is the last point where it evaluated the model, with its jet
     equations, z, polished = _equations(problem, search, y_max), polish.evaluated, polish.jet
     # the search's point and its multipliers, of the rows held there (the others' are the

@@ -1,8 +1,6 @@
 """The polish: Newton (optimistix) on the KKT or feasibility equations of the search's
 active set, and the implicit derivatives of its root."""
 
-from typing import TYPE_CHECKING
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -12,11 +10,9 @@ from jaxtyping import Array, Bool, Float
 
 from magdesign.design._linear import LUOrSVD
 from magdesign.design._sqp.jet import Jet, Settings, _first_jet, _lagrangian_hessian, _scaled_rows, _values
+from magdesign.design._sqp.search import SearchState
 from magdesign.design._sqp.step import _held_rows
 from magdesign.design.problem import Problem
-
-if TYPE_CHECKING:  # the search's state, whose loop steps the polish
-    from magdesign.design._sqp.loop import _State
 
 
 class _Active(eqx.Module):
@@ -176,7 +172,7 @@ def _about(equations, z, jet):
     return lambda root, _: (equations.rows(z, jet) + equations.tangent(jet, z, root - z), None)
 
 
-def _equations(problem: Problem, search: "_State", y_max):
+def _equations(problem: Problem, search: SearchState, y_max):
     """The polish's equations on the active set of the search's last subproblem: the KKT
     system with an objective, else the feasibility equations."""
     step = search.step
@@ -196,7 +192,7 @@ def _newton(settings: Settings):
     return optx.Newton(rtol=settings.rtol * 0.1, atol=settings.rtol * 0.1, linear_solver=LUOrSVD())
 
 
-class _Polish(eqx.Module):
+class PolishState(eqx.Module):
     """The polish's state: ``z`` the point where Newton evaluates the model next,
     ``evaluated`` the last point where it did, ``jet`` the model's :class:`Jet` there,
     ``newton`` optimistix's Newton state (its ``f`` the equations' residual at
@@ -215,16 +211,16 @@ def _polish_at(equations, z, jet, newton):
     state = newton.init(
         _about(equations, z, jet), z, None, {}, jax.eval_shape(equations.rows, z, jet), None, frozenset()
     )
-    return _Polish(z, z, jet, state, jnp.asarray(False))
+    return PolishState(z, z, jet, state, jnp.asarray(False))
 
 
-def _polish_start(equations, search: "_State", newton):
+def _polish_start(equations, search: SearchState, newton):
     """The polish's state before its first step on ``equations`` (:func:`_equations` of
     the search): at the search's point and multipliers."""
     return _polish_at(equations, equations.unknowns(search.y, search.step.multipliers), search.jet, newton)
 
 
-def _newton_step(equations, newton, polish: _Polish, jet, max_steps):
+def _newton_step(equations, newton, polish: PolishState, jet, max_steps):
     """The polish after Newton's step from its point z, where the model's :class:`Jet` is
     ``jet``. Stepped as optimistix's interactive use of a solver (its ``step`` and
     ``terminate``) inside the solver's loop, so that the search and the polish evaluate the
@@ -236,4 +232,4 @@ def _newton_step(equations, newton, polish: _Polish, jet, max_steps):
     stop, _ = newton.terminate(fn, z, None, {}, state, frozenset())
     finite = jnp.all(jnp.isfinite(z)) & jnp.all(jnp.isfinite(state.f))
     done = stop | (state.step >= max_steps) | ~finite
-    return _Polish(z_next, z, jet, state, done)
+    return PolishState(z_next, z, jet, state, done)
