@@ -92,7 +92,7 @@ print(time.perf_counter() - began, result.status)
 # fusions and instructions.
 FIRST_CALL_STAGES = """
 import re, resource, time
-from magdesign._numerics import DESIGN_ATOL, DESIGN_RTOL
+from magdesign.design.solve import DESIGN_ATOL, DESIGN_RTOL
 from magdesign._tracing import errors_as_nan, gc_paused
 from magdesign.design._sqp.program import _compiled, _host, _structure, settings_of
 from magdesign.spec.design import default_spec, problem_from_spec

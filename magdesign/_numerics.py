@@ -61,15 +61,6 @@ def safe_log(x, at_zero=0.0):
     return jnp.where(bad, at_zero, jnp.log(jnp.where(bad, 1.0, x)))
 
 
-# Default tolerances of the design solver (magdesign.design.solve's rtol and atol; its other
-# thresholds are the fields of magdesign.design._sqp.sqp.SQP). Both act on dimensionless
-# quantities: variables scaled to their bound width, residuals scaled by their target.
-# Default tolerance on scaled target and limit residuals: 1e-10 leaves a margin of 10 below
-# the 1e-9 relative accuracy the designs are checked to; the final Newton polish stops
-# at a tenth of it (its quadratic convergence usually takes it to rounding).
-DESIGN_RTOL = 1e-10
-# Default step tolerance in scaled variables: a converged step in a [0, 1] box.
-DESIGN_ATOL = 1e-13
 # Values that spread by less than this fraction of their size are one number up to rounding:
 # reports and pictures show the number, not its noise (sweep maps, tolerance histograms).
 ROUNDING_SPREAD = 1e-9
@@ -92,42 +83,6 @@ def smooth_ramp(x, width):
     """
     return width * jax.nn.softplus(x / width)
 
-
-# Solver thresholds of the axisymmetric dome (magdesign.mechanics._axisymmetric).
-# A state is in equilibrium when its largest out-of-balance nodal force is below this
-# fraction of mu t^2 (the wall's own force scale, 2.4 N for the dome-Hall sensor's dome): Newton
-# converges quadratically there, so the state it leaves is exact to float64 rounding, and
-# the tolerance stays above the rounding of the contact forces (the penalty times ~1e-18 m)
-# and, for walls thicker than ~0.2 mm of the dome-Hall sensor's resin, of the wall's forces (see
-# DOME_ROUNDING_SLACK for thinner ones).
-DOME_RESIDUAL_TOL = 1e-10
-# Float64 rounding of the wall's nodal forces leaves a floor of about eps K R_o^2 theta^2
-# (K the bulk modulus, theta the wall's rotation: the volume change J - 1 is a small
-# difference of rotation terms), measured 2e-12 N at rotations of order one whatever the
-# wall, which is the tolerance itself for a 0.2 mm wall of the dome-Hall sensor's resin. A state within
-# this many tolerances, whose Newton step no longer halves its out-of-balance force,
-# sits on that floor and counts as converged.
-DOME_ROUNDING_SLACK = 100.0
-# Smallest plate travel of the axisymmetric dome, as a fraction of the wall thickness:
-# a force whose Reissner travel is below it is evaluated at the force whose Reissner
-# travel equals it. Smaller travels press the plate into the dome by amounts comparable
-# with the contact smoothing (CONTACT_SMOOTHING t), which then sets the answer; the secant
-# compliance of a frictionless contact has no finite zero-load limit anyway (the wall's
-# Hertz-like indentation, d ~ F^(2/3)).
-DOME_MIN_TRAVEL_FRACTION = 1e-3
-# Newton takes its full step, untested by the line search, when the decrease it predicts
-# is below this fraction of the potential's magnitude: there the potential's float64
-# rounding (measured up to 3e-11 relative, a thin wall's bending energy being a small
-# difference of rotations) hides the decrease, and a test on the potential would refuse
-# good steps (a t/R = 0.005 dome at a travel of 0.002 t stalls 20x above its tolerance).
-# Near equilibrium Newton's step is exact to second order, so nothing is lost.
-DOME_ENERGY_RESOLUTION = 1e-9
-
-# First Levenberg shift (tried only when the tangent matrix is not positive definite,
-# e.g. while a load step passes through a buckling-like intermediate state), as a
-# fraction of each unknown's own diagonal entry (floored at this fraction of the largest);
-# it grows tenfold until a Cholesky succeeds.
-DOME_LEVENBERG_START = 1e-6
 
 # Smallest distance to a film's corner, as a fraction of the film's width: the field of a
 # finite film diverges logarithmically at its corners (where its face meets its side);
@@ -168,14 +123,3 @@ def safe_atan2(y, x):
     is_zero = scale == 0.0
     safe_scale = jnp.where(is_zero, 1.0, scale)
     return jnp.where(is_zero, 0.0, jnp.arctan2(y / safe_scale, jnp.where(is_zero, 1.0, x / safe_scale)))
-
-
-# Saturating soft bodies (fields.soft): Newton's method on the cells' polarisation J (T)
-# with a backtracking line search, stopped when the residual's largest entry is below
-# SATURATION_RESIDUAL (T). Its rounding is about chi eps |J| (chi up to ~1e4, |J| up to
-# ~2 T: ~4e-12 T). A step is halved until |r|^2 falls by SATURATION_ARMIJO times the
-# step's fraction (Armijo's sufficient decrease), down to SATURATION_SHORTEST_STEP.
-SATURATION_RESIDUAL = 1e-9
-SATURATION_MAX_STEPS = 100
-SATURATION_ARMIJO = 1e-4
-SATURATION_SHORTEST_STEP = 2.0**-30

@@ -1,5 +1,6 @@
 """The design solver's entry points: :func:`solve` one design, :func:`multistart` one
 from many starts at once, and :func:`solve_batch` (what :func:`~magdesign.design.sweep`
+
 runs) for many points of a problem.
 
 The solver itself, sequential quadratic programming with a Newton polish and implicit
@@ -13,7 +14,6 @@ import time
 
 import numpy as np
 
-from magdesign._numerics import DESIGN_ATOL, DESIGN_RTOL
 from magdesign.design._sqp.batch import solve_batch as solve_batch
 from magdesign.design._sqp.batch import usable_cores as usable_cores
 from magdesign.design._sqp.program import _host, _run, _start, _unpack
@@ -22,6 +22,16 @@ from magdesign.design._sqp.program import settings_of as settings_of
 from magdesign.design._sqp.sqp import SQP as SQP
 from magdesign.design.problem import Problem
 from magdesign.design.report import DesignResult, DesignSweep
+
+# Default tolerances of the design solver (solve's rtol and atol; its other
+# thresholds are the fields of magdesign.design._sqp.sqp.SQP). Both act on dimensionless
+# quantities: variables scaled to their bound width, residuals scaled by their target.
+# Default tolerance on scaled target and limit residuals: 1e-10 leaves a margin of 10 below
+# the 1e-9 relative accuracy the designs are checked to; the final Newton polish stops
+# at a tenth of it (its quadratic convergence usually takes it to rounding).
+DESIGN_RTOL = 1e-10
+# Default step tolerance in scaled variables: a converged step in a [0, 1] box.
+DESIGN_ATOL = 1e-13
 
 
 def solve(

@@ -15,10 +15,9 @@ from collections.abc import Mapping
 import numpy as np
 from jaxtyping import ArrayLike
 
-from magdesign._numerics import DESIGN_ATOL, DESIGN_RTOL
 from magdesign.design.problem import Problem, source_of
 from magdesign.design.report import DesignSweep
-from magdesign.design.solve import SQP, batch_inputs, settings_of, solve_batch
+from magdesign.design.solve import DESIGN_ATOL, DESIGN_RTOL, SQP, batch_inputs, settings_of, solve_batch
 from magdesign.scene import parameters
 from magdesign.spec.sizes import check_fits
 

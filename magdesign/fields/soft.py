@@ -62,16 +62,22 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign import _newton
-from magdesign._numerics import (
-    SATURATION_ARMIJO,
-    SATURATION_MAX_STEPS,
-    SATURATION_RESIDUAL,
-    float_array,
-)
+from magdesign._numerics import float_array
 from magdesign._tracing import checked
 from magdesign._validation import check_last_axis, check_positive, check_scalar
 from magdesign.fields.cuboid import FAR_NODES, cuboid_tensor
 from magdesign.units import MU0
+
+# Saturating soft bodies: Newton's method on the cells' polarisation J (T)
+# with a backtracking line search, stopped when the residual's largest entry is below
+# SATURATION_RESIDUAL (T). Its rounding is about chi eps |J| (chi up to ~1e4, |J| up to
+# ~2 T: ~4e-12 T). A step is halved until |r|^2 falls by SATURATION_ARMIJO times the
+# step's fraction (Armijo's sufficient decrease), at most
+# magdesign._newton.HALVINGS times.
+SATURATION_RESIDUAL = 1e-9
+SATURATION_MAX_STEPS = 100
+SATURATION_ARMIJO = 1e-4
+
 
 # The shapes and how many lengths (m) a spec's size holds (cuboid: full sides x, y, z;
 # cylinder: diameter, length; sphere: diameter).

@@ -39,10 +39,18 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array, ArrayLike, Float
 
-from magdesign._numerics import DOME_MIN_TRAVEL_FRACTION
 from magdesign._validation import _concrete, check_nonnegative, check_positive
 from magdesign.mechanics import _axisymmetric
 from magdesign.mechanics.materials import AbstractHyperelastic, AbstractMaterial
+
+# Smallest plate travel of the axisymmetric dome, as a fraction of the wall thickness:
+# a force whose Reissner travel is below it is evaluated at the force whose Reissner
+# travel equals it. Smaller travels press the plate into the dome by amounts comparable
+# with the contact smoothing (CONTACT_SMOOTHING t), which then sets the answer; the secant
+# compliance of a frictionless contact has no finite zero-load limit anyway (the wall's
+# Hertz-like indentation, d ~ F^(2/3)).
+DOME_MIN_TRAVEL_FRACTION = 1e-3
+
 
 FIDELITIES = ("reissner", "axisymmetric")
 BASES = ("bonded", "sliding")
@@ -182,7 +190,7 @@ def _axisymmetric_curve(outer_radius, thickness, material, travels, base, mesh):
 
 def _force_floor(outer_radius, thickness, material):
     """Smallest force (N) the axisymmetric level solves for: DOME_MIN_TRAVEL_FRACTION t of
-    Reissner's travel (see magdesign._numerics)."""
+    Reissner's travel (see DOME_MIN_TRAVEL_FRACTION)."""
     return DOME_MIN_TRAVEL_FRACTION * thickness / _reissner_compliance(outer_radius, thickness, material)
 
 
@@ -230,7 +238,7 @@ def dome_compliance(
         max_force: plate force (N), >= 0; a scalar or an array, every force of which is
             found on one followed path. Reissner: the same compliance at every force.
             Axisymmetric: a force below DOME_MIN_TRAVEL_FRACTION t / C_Reissner (5.4 mN
-            for the dome-Hall sensor's dome) is evaluated at that floor (see magdesign._numerics).
+            for the dome-Hall sensor's dome) is evaluated at that floor (see DOME_MIN_TRAVEL_FRACTION).
         fidelity: "reissner" (closed form, linear) or "axisymmetric" (nonlinear FE).
         base: "bonded" (rim clamped, as in the dome-Hall sensor) or "sliding" (rim free to slide radially).
         mesh: (elements through the wall, elements along the meridian), axisymmetric only.

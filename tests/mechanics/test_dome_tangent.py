@@ -13,8 +13,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from magdesign._numerics import DOME_LEVENBERG_START
 from magdesign.mechanics import MooneyRivlin, _axisymmetric, _blocks
+from magdesign.mechanics._axisymmetric.equilibrium import DOME_LEVENBERG_START
 from magdesign.mechanics.materials import excess_invariants
 
 RESIN = MooneyRivlin(c10=0.1182e6, c01=0.1769e6)

@@ -54,16 +54,41 @@ from jax import lax
 from magdesign import _newton
 from magdesign._numerics import (
     CONTACT_SMOOTHING,
-    DOME_ENERGY_RESOLUTION,
-    DOME_LEVENBERG_START,
-    DOME_RESIDUAL_TOL,
-    DOME_ROUNDING_SLACK,
     smooth_ramp,
 )
 from magdesign._tracing import traced_once
 from magdesign.mechanics import _blocks
 from magdesign.mechanics._axisymmetric.mesh import _DN, _EDGE_DN, _EDGE_N, _EDGE_W, _N, _P, _W
 from magdesign.mechanics.materials import isochoric_excess
+
+# Solver thresholds of the axisymmetric dome.
+# A state is in equilibrium when its largest out-of-balance nodal force is below this
+# fraction of mu t^2 (the wall's own force scale, 2.4 N for the dome-Hall sensor's dome): Newton
+# converges quadratically there, so the state it leaves is exact to float64 rounding, and
+# the tolerance stays above the rounding of the contact forces (the penalty times ~1e-18 m)
+# and, for walls thicker than ~0.2 mm of the dome-Hall sensor's resin, of the wall's forces (see
+# DOME_ROUNDING_SLACK for thinner ones).
+DOME_RESIDUAL_TOL = 1e-10
+# Float64 rounding of the wall's nodal forces leaves a floor of about eps K R_o^2 theta^2
+# (K the bulk modulus, theta the wall's rotation: the volume change J - 1 is a small
+# difference of rotation terms), measured 2e-12 N at rotations of order one whatever the
+# wall, which is the tolerance itself for a 0.2 mm wall of the dome-Hall sensor's resin. A state within
+# this many tolerances, whose Newton step no longer halves its out-of-balance force,
+# sits on that floor and counts as converged.
+DOME_ROUNDING_SLACK = 100.0
+# Newton takes its full step, untested by the line search, when the decrease it predicts
+# is below this fraction of the potential's magnitude: there the potential's float64
+# rounding (measured up to 3e-11 relative, a thin wall's bending energy being a small
+# difference of rotations) hides the decrease, and a test on the potential would refuse
+# good steps (a t/R = 0.005 dome at a travel of 0.002 t stalls 20x above its tolerance).
+# Near equilibrium Newton's step is exact to second order, so nothing is lost.
+DOME_ENERGY_RESOLUTION = 1e-9
+# First Levenberg shift (tried only when the tangent matrix is not positive definite,
+# e.g. while a load step passes through a buckling-like intermediate state), as a
+# fraction of each unknown's own diagonal entry (floored at this fraction of the largest);
+# it grows tenfold until a Cholesky succeeds.
+DOME_LEVENBERG_START = 1e-6
+
 
 # Penalty stiffness of the contact, kappa t / mu: the penetration it leaves is a 1/1000 of
 # the wall's own compression p t / E under the contact pressure p, a small part of the
@@ -304,7 +329,7 @@ def newton(mesh, mask, held, force, params, y0, max_iter, shift=0):
     that needs none.
     Converged: the largest entry of the residual (an out-of-balance force, N) is at most
     :func:`_tolerance`, or at most DOME_ROUNDING_SLACK times it where a Newton step no
-    longer halves it (float64's floor, see magdesign._numerics)."""
+    longer halves it (float64's floor, see DOME_ROUNDING_SLACK)."""
     tol = _tolerance(params)
     y0 = mask * y0 + (1 - mask) * held
     unit = _unit_last(mesh)
