@@ -217,7 +217,7 @@ def solve_qp(Q, q, A, b, G, h, *, guess=None, box=None, tol=1e-12, max_iteration
         lambda st: ~st[4] & (st[5] < _ACTIVE_SET_ROUNDS), active_set_round, first_round
     )
     # Inside where_needed, not a lax.cond (under vmap both branches would run, the loop to
-    # its end), nor beside it: XLA hoisted the interior-point loop's invariant parts (its
+    # its end), nor beside it: XLA hoists the interior-point loop's invariant parts (its
     # Newton matrix's blocks) out of the loop, computed at every step in every lane.
     interior = where_needed(
         ~guessed,

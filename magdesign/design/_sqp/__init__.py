@@ -27,7 +27,7 @@ to its target or limit. It has two stages:
    constraints), and after a step that needed it the next is bent from its first try.
    Where the step vanishes (the subproblem solved once more with the Hessian at its own
    multipliers: the last point's, after an infeasible subproblem priced at the elastic
-   cost, made steps vanish where the point was not stationary) the point is stationary;
+   cost, make steps vanish where the point is not stationary) the point is stationary;
    "successful" then also needs the reduced Hessian of the Lagrangian on the null space
    of the active constraints to be positive semi-definite, and a point that fails it is
    left along its direction of negative curvature, bent along the active constraints (at
@@ -46,13 +46,13 @@ to its target or limit. It has two stages:
    stepped in the search's own loop once the search ends: optimistix's interactive use
    of a solver (its ``init``, ``step`` and ``terminate``; the steps and stopping rule of
    ``optimistix.root_find``), so that one place of the program evaluates the model and
-   XLA compiles it once, where a separate root find compiled it again. Newton's first step
+   XLA compiles it once, where a separate root find would compile it again. Newton's first step
    is taken from the search's last jet, so the model is not evaluated again where the
    search has just evaluated it. A problem without objective is a feasibility problem,
    whose equations (targets, active limits, fixed variables; in general fewer than the
    unknowns) Newton through an SVD solves as Gauss-Newton with minimum-norm steps (see
    :func:`_newton`; ``optimistix.least_squares`` would differentiate grad |r|^2 / 2,
-   which traces second derivatives: on the spin-valve example that took the compile of a
+   which traces second derivatives: on the spin-valve example that would take the compile of a
    batched solve from under 1 GB to over 11 GB). The linear systems go
    to :mod:`magdesign.design._linear`: LU where the Jacobian is square and well
    conditioned, else an SVD, whose minimum-norm step handles rank-deficient Jacobians

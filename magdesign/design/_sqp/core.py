@@ -19,8 +19,8 @@ from magdesign.design.status import status_code
 class CoreSolution(NamedTuple):
     """What the core returns (arrays; a leading batch axis under vmap). ``outputs`` holds
     the model outputs named by ``Problem.outputs``; m counts targets and limit rows. A
-    NamedTuple, not an eqx.Module: the host builds one per solve, where constructing a
-    Module took 25 of :func:`_unpack`'s 47 us."""
+    NamedTuple, not an eqx.Module: the host builds one per solve, and constructing a
+    Module costs about half of :func:`_unpack`'s time."""
 
     x: Float[Array, " n"]
     multipliers: Float[Array, " m"]
@@ -68,16 +68,17 @@ def postprocess(problem: Problem, theta, settings: Settings, state: SQPState) ->
         dy = jnp.zeros((n, 0))
     outputs, c = polished.outputs, polished.v[1:]
     # The polish refines the search's point; one that ends outside the box or far away
-    # found another solution of the equations, and the search's point stands, as it does
-    # where the model is not finite at the polish's point, and where the polish breaks a
-    # row that the search's point meets (in an experiment with another QP Hessian, Newton's
-    # residual on the badly scaled hs106 stalled 1.9e-10 outside a limit that the search's
-    # point held to 6e-16: "limit_violated"). With an objective, a polish that went further
-    # stands where it met its equations to the design's tolerance at an objective no higher
-    # than the search's point's, its held limits' and bounds' multipliers of the right sign
-    # (to sqrt(rtol)): on 1e10 (x + y - 1)^2 + (x - y - 0.2)^2 the search, whose objective
-    # (scaled to its gradient at the start) fell below rounding, stopped 0.04 from the
-    # minimum, and the polish's exact step there, 0.009 of a box width, was dropped.
+    # has found another solution of the equations, and the search's point stands, as it
+    # does where the model is not finite at the polish's point, and where the polish breaks
+    # a row that the search's point meets (with another QP Hessian, Newton's residual on the
+    # badly scaled hs106 stalls 1.9e-10 outside a limit that the search's point holds to
+    # 6e-16: "limit_violated"). With an objective, a polish that goes further stands where it
+    # meets its equations to the design's tolerance at an objective no higher than the
+    # search's point's, its held limits' and bounds' multipliers of the right sign (to
+    # sqrt(rtol)): on 1e10 (x + y - 1)^2 + (x - y - 0.2)^2 the search, whose objective
+    # (scaled to its gradient at the start) falls below rounding, stops 0.04 from the
+    # minimum, and the polish's exact step there (0.009 of a box width, beyond
+    # sqp.polish_reach) stands by this rule.
     near = jnp.max(jnp.abs(y - y_start)) <= sqp.polish_reach
     if problem.objective is not None:
         pull = search.weight * polished.J[0] + polished.J[1:].T @ multipliers  # a fixed variable's bound's multiplier
@@ -98,9 +99,9 @@ def postprocess(problem: Problem, theta, settings: Settings, state: SQPState) ->
     # Stationarity is a gradient condition: met to sqrt(rtol), as the optimum's value is, or
     # to its own rounding (y's, through the Lagrangian's Hessian) where that is larger, as
     # after a start on a plateau, whose small gradient scales the objective up: max
-    # exp(-(x - 1)^2) from x = -4 (gradient 3e-10) met it at x = 1 to 1.3e-5, with a Hessian
-    # of 3e11, and was called "max_steps_reached". Where the polish is not kept, at the
-    # search's point, which then stands.
+    # exp(-(x - 1)^2) from x = -4 (gradient 3e-10) meets it at x = 1 only to 1.3e-5, with a
+    # Hessian of 3e11, which sqrt(rtol) alone would call "max_steps_reached". Where the
+    # polish is not kept, at the search's point, which then stands.
     at_search = equations.rows(equations.unknowns(y_start, multipliers_start), search.jet)
     residual = jnp.where(kept, residual, jnp.max(jnp.abs(at_search), initial=0.0))
     rounding = jnp.zeros(())

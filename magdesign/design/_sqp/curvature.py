@@ -37,14 +37,15 @@ def _least_curvature(jet, step: _Step, bound_multipliers, weight, approach, n_ta
     positive multiplier; and the rows (m,) and variables (n,) of ``face``, a pair of masks
     that :func:`_saddle_on_faces` holds too), relative to the Hessian's largest
     eigenvalue modulus (plus 1; about 2 where that null space is empty); the direction v
-    (n,) to leave or probe the point along: e's eigenvector where e is negative beyond else a combination of all the eigenvectors whose curvature is at
+    (n,) to leave or probe the point along: e's eigenvector where e is negative beyond
+    sqp.curvature_tol, else a combination of all the eigenvectors whose curvature is at
     most sqp.flat_curvature, weighted 1, 2, 3, ... (a probe along the least eigenvector
-    alone missed y^3 inside a disk beside a variable x that the objective ignores: it
-    probed along x); the probe's second direction u (n,): the ``approach`` (the
-    direction the steps came from where they came only linearly, else 0) on that null
+    alone misses y^3 inside a disk beside a variable x that the objective ignores: it
+    probes along x); the probe's second direction u (n,): the ``approach`` (the
+    direction the steps come from where they come only linearly, else 0) on that null
     space, 0 where it is v's. The steps' approach to y^3's 0 leaves y a curvature of
     6 y, small but above the flat one's; mixed into v, a curved direction's quadratic
-    rise hid a flat one's cubic fall, so u is probed apart. v and u are scaled to a
+    rise hides a flat one's cubic fall, so u is probed apart. v and u are scaled to a
     largest entry of 1; w and wu (n,) are their second-order corrections on those
     constraints (:func:`_bend`)."""
     hessian = _lagrangian_hessian(jet, step.multipliers, weight)
@@ -79,7 +80,7 @@ def _saddle_on_faces(jet, step: _Step, bound_multipliers, weight, y, y_max, n_ta
     v, w; v signed to leave). At (1, 0), a vertex of min -(x^2 + y^2) on x + y <= 1 in the
     box [0, 1]^2, the QP gives x's upper bound the whole multiplier: y is free on the null
     space, with curvature -2, but x + y <= 1 blocks +y and y >= 0 blocks -y, and the
-    vertex, a strict minimum, was called "not_a_minimum".
+    vertex, a strict minimum, would otherwise read "not_a_minimum".
 
     The least curvature on that cone lies on one of its faces, where some of the weak rows
     are held too, along the least eigenvector there; so each face's least eigenvector,

@@ -142,7 +142,7 @@ def _solvable(equations, z, jet, theta, dz, *, sqp):
     a limit's bound (the others: True). Held rows that are dependent (a limit whose two
     bounds are equal, a limit given twice) leave none for a bound moved alone, and the
     least-squares answer, which splits the move between the rows, is no derivative: a
-    pinned limit's two sides got 0.25 each where raising the upper one alone moves the
+    pinned limit's two sides get 0.25 each where raising the upper one alone moves the
     optimum by 0.5 (and lowering it leaves no design)."""
     problem = equations.problem
     n_rows = len(problem.targets) + len(problem.limit_rows)

@@ -125,8 +125,8 @@ def _leaving(v, gradient, y, y_max, jet, n_targets, *, sqp: SQP):
     leave a saddle downhill, or, where flat, towards the side with more room in the
     box and the limits, then in the box alone. At (0, 1), a vertex of
     min -(x^2 + 2 y^2) on x + y <= 1, y <= 1, whose limit holds with no multiplier,
-    the box's room alone chose +x, across the limit; every escape failed and the
-    point was called "not_a_minimum"."""
+    the box's room alone would choose +x, across the limit, where every escape fails
+    and the point reads "not_a_minimum"."""
     v = jnp.where(jnp.dot(gradient, v) > 0.0, -v, v)
     box = jnp.stack([_room(y, v, y_max), _room(y, -v, y_max)])
     held = jnp.minimum(
@@ -151,14 +151,14 @@ def accept(problem: Problem, settings: Settings, y_max, state: SearchState, y, j
     if problem.objective is None:
         # Without an objective the QP knows no curvature of the rows: next to the point
         # closest to a target that no point meets (sin x = 2 near pi / 2, x^2 = -1 at 0)
-        # its steps overshot that point by the radius, to and fro, and the nonmonotone
-        # merit took them: "max_steps_reached" after 100 evaluations. A step taken
-        # uphill, beyond which the violation rises again (its gradient there points
-        # along the step), overshot: it halves the radius, and one so taken at the
-        # radius's floor leaves no shorter step to try: the point is stationary.
-        # (Overshooting alone, downhill too, halved the radius along Powell's badly
-        # scaled system, whose nearly met rows change sign from step to step: 60
-        # steps where 19 did.) The radius grows only after a step that gained at least
+        # its steps overshoot that point by the radius, to and fro, and the nonmonotone
+        # merit takes them, up to "max_steps_reached". A step taken uphill, beyond which
+        # the violation rises again (its gradient there points along the step), has
+        # overshot: it halves the radius, and one so taken at the radius's floor leaves
+        # no shorter step to try: the point is stationary. (A step downhill does not
+        # halve it: along Powell's badly scaled system, whose nearly met rows change
+        # sign from step to step, halving on every overshoot takes 60 steps where this
+        # takes 19.) The radius grows only after a step that gained at least
         # sqp.growth_gain of the merit's decrease that its linearisation promised (on x^2's
         # way to 0 a step of half the distance gains 3/4 of it).
         rising = jax.grad(_violation)(jet.v[1:], n_targets, sqp=sqp) @ jet.J[1:]  # the violation's gradient in y
@@ -179,11 +179,12 @@ def accept(problem: Problem, settings: Settings, y_max, state: SearchState, y, j
     # The penalty stays at least max(twice the multipliers, sqp.penalty_floor) and falls
     # halfway towards that at each point (Powell's update, with one penalty for all
     # rows, where SLSQP keeps one per row, and a floor): after an elastic step
-    # (multipliers at sqp.elastic) a penalty kept at 2e6 while the multipliers fell
-    # to 2e-3 made the merit of hs069's curved targets' second-order violation (1e-9)
-    # outweigh the objective's decrease: steps of 1e-3 to and fro, "max_steps_reached".
-    # Without the floor the penalty fell with the vanishing multipliers of hs047's
-    # degenerate minimum, and its probe took an infeasible point.
+    # (multipliers at sqp.elastic) a penalty kept at 2e6 while the multipliers fall
+    # to 2e-3 would make the merit of hs069's curved targets' second-order violation
+    # (1e-9) outweigh the objective's decrease (steps of 1e-3 to and fro, to
+    # "max_steps_reached").
+    # Without the floor the penalty falls with the vanishing multipliers of hs047's
+    # degenerate minimum, and its probe takes an infeasible point.
     need = jnp.maximum(2.0 * jnp.max(jnp.abs(step.multipliers), initial=0.0), sqp.penalty_floor)
     nu = jnp.maximum(need, 0.5 * (state.nu + need))
     parts = _merit_parts(jet, state.weight, n_targets, sqp=sqp)
@@ -226,7 +227,7 @@ def accept(problem: Problem, settings: Settings, y_max, state: SearchState, y, j
     # degenerate point, where at a minimum with curvature Newton's steps shrink
     # quadratically), is probed on both sides before it is accepted (a stationary start
     # too: no steps tell how it was approached). Without an objective there is no
-    # minimum to confirm, nor a direction to probe (every probe tried the point itself).
+    # minimum to confirm, nor a direction to probe (every probe would try the point itself).
     flat = (curvature <= sqp.flat_curvature) | linear
     probe = stationary & ~saddle & flat & (state.escapes < sqp.escapes) & (problem.objective is not None)
     phase = jnp.select([escape, saddle, probe, stationary], [ESCAPE, NOT_MINIMUM, PROBE, CONVERGED], SEARCH)
@@ -315,7 +316,7 @@ def update(problem: Problem, settings: Settings, y_max, state: SearchState, tria
     # symmetric design) offers no step at all: move it once a little into the box, by
     # a different amount per variable; otherwise scale the objective and accept it
     # (to a unit gradient, counted no smaller than sqp.gradient_floor times the
-    # Hessian: next to a stationary point 1 / |gradient| left the polish only rounding).
+    # Hessian: next to a stationary point 1 / |gradient| leaves the polish only rounding).
     flat = start & ~state.nudged & jnp.all(jet.J == 0.0)
     inward = jnp.where(trial > 0.5 * y_max, -1.0, 1.0)
     nudge = inward * sqp.start_nudge * y_max * (1.0 + jnp.arange(n)) / n
@@ -361,7 +362,7 @@ def update(problem: Problem, settings: Settings, y_max, state: SearchState, tria
     given_up = jnp.select([state.phase == ESCAPE, probing], [NOT_MINIMUM, CONVERGED], STALLED)
     failed = eqx.tree_at(lambda s: s.phase, shorter, given_up)
     too_short = jnp.abs(next_alpha) < jnp.where(probing, sqp.probe_last, sqp.shortest_step)
-    # A probe that found nothing along its direction tries its second, if it has one.
+    # A probe that finds nothing along its direction tries its second, if it has one.
     turned = eqx.tree_at(
         lambda s: (s.direction, s.correction, s.alpha, s.second, s.second_correction),
         shorter,

@@ -59,7 +59,7 @@ def subproblem(jet, y, y_max, multipliers, weight, n_targets, has_objective, rad
 
 def _definite(eigenvalues, size, *, sqp):
     """The moduli of a Hessian's ``eigenvalues``, those below sqp.kept_curvature times
-    ``size`` raised to sqp.hessian_floor times it; and where they were kept."""
+    ``size`` raised to sqp.hessian_floor times it; and where they are kept."""
     moduli = jnp.abs(eigenvalues)
     kept = moduli >= sqp.kept_curvature * size
     return jnp.maximum(moduli, jnp.where(kept, 0.0, sqp.hessian_floor * size)), kept
@@ -69,7 +69,7 @@ def _subproblem(
     jet, y, y_max, multipliers, weight, n_targets, has_objective, radius, held_limits, last_held=None, *, sqp
 ):
     """((Q, q, A, b, G, h), flat): the QP of one step at y for :func:`solve_qp`, and the
-    flat directions of its Hessian (n, n) (the eigenvectors that got the floor; the
+    flat directions of its Hessian (n, n) (the eigenvectors that get the floor; the
     others zeroed; those of the whole Hessian, where the dependent rows split it). The
     QP: minimise the quadratic model of the Lagrangian subject to the linearised rows and
     the box, each target row relaxed by two elastic slacks and each limit row by one,
@@ -102,14 +102,14 @@ def _subproblem(
         fixing = jnp.concatenate([fixing, jnp.where(held_limits[:, None], J_c[n_targets:], 0.0)])
     if has_objective and fixing.shape[0]:
         # The floor bounds steps along flat directions; along those that the targets'
-        # linearisation fixes it only slows the step: x^4 on x + y = 1, where y is flat, got
-        # the floor's curvature along the target's line and crawled (steps of 1/130 of
+        # linearisation fixes it only slows the step: x^4 on x + y = 1, where y is flat, gets
+        # the floor's curvature along the target's line and crawls (steps of 1/130 of
         # Newton's, "max_steps_reached" 4e-4 from the minimum). Off: on the span of the
         # targets' gradients projected onto the flat directions (regularised by
         # sqp.null_space_rtol of their squared sizes, so that a gradient barely in the
         # flat directions removes barely any floor). Limits only where a first solve
         # holds them (see _settled_step): which hold is known only after the QP (with the
-        # last step's active ones, hs106's polish ended 1.9e-10 outside a limit).
+        # last step's active ones, hs106's polish ends 1.9e-10 outside a limit).
         spread = flat @ (flat.T @ fixing.T)  # (n, rows)
         gram = spread.T @ spread
         gram = gram + sqp.null_space_rtol * (1.0 + jnp.trace(gram)) * jnp.eye(fixing.shape[0])
@@ -168,12 +168,12 @@ def _hessian_multipliers(jet, last: _Step, bound_multipliers, last_held, *, sqp)
     unbounded set, and its interior-point method ends half way to the elastic price: at
     hs108's x9 = 0, where the limits x3 x9 and -x5 x9 (both at least 0) and the bound x9
     at least 0 all have gradients along x9, two multipliers of 4e5 and 6e5 whose
-    Hessians' cross terms, made definite, gave x3 and x5 curvatures of 1e6; steps of 3e-7 crawled to
-    "max_steps_reached" at a point far from stationary. A row priced at the elastic cost
-    keeps its multiplier: the linearisation cannot meet it, and its multiplier is the
+    Hessians' cross terms, made definite, would give x3 and x5 curvatures of 1e6, and
+    steps of 3e-7 that crawl to "max_steps_reached" at a point far from stationary. A row
+    priced at the elastic cost keeps its multiplier: the linearisation cannot meet it, and its multiplier is the
     price of its violation, not a share of a combination (min x with a target x^2 of -1/2,
-    projected with the radius's multiplier, got a Hessian a billionth of the elastic one,
-    and steps to and fro across the point of least violation)."""
+    projected with the radius's multiplier, would get a Hessian a billionth of the elastic
+    one, and steps to and fro across the point of least violation)."""
     rows, fixed = last_held
     lower, upper = jnp.split(bound_multipliers, 2)
     matrix = _active_matrix(jet, rows, fixed)  # (m + n, n)
@@ -222,8 +222,8 @@ def _step(
         # An inactive row's multiplier is the interior-point method's residual over the row's
         # slack, so a row counts as active only where its multiplier exceeds its slack too:
         # beside multipliers of 1e6 (hs055's six dependent targets) the lower bound of a
-        # variable 0.017 inside the box got a multiplier of 3e-8, and the polish held the
-        # variable on it.
+        # variable 0.017 inside the box gets a multiplier of 3e-8, which alone would make
+        # the polish hold the variable on it.
         active = ((limit_multipliers, limit_slack), (lower_multipliers, lower_slack), (upper_multipliers, upper_slack))
         active_limits, at_lower, at_upper = (
             multiplier > jnp.maximum(sqp.active_multiplier, slack) for multiplier, slack in active
@@ -237,9 +237,9 @@ def _step(
         at_lower, at_upper = at_lower & (y <= radius), at_upper & (y_max - y <= radius)
         # Those the step ends on to rounding are active too, with no multiplier (weakly): at
         # hs108's optimum x9 >= 0, x3 x9 >= 0 and -x5 x9 >= 0 hold so, and without them it
-        # ended "limit_violated" (the polish, holding the rows with a multiplier, moved along
+        # ends "limit_violated" (the polish, holding the rows with a multiplier, moves along
         # the optimum's manifold to x9 < 0). Within sqp.on_constraint, a limit 1e-10 below
-        # a bound brought the bound in too, and the polish split the two.
+        # a bound would bring the bound in too, and the polish would split the two.
         weakly = ends_on(sqp.rounded)
         held = (active_limits, at_lower, at_upper)
         active_limits, at_lower, at_upper = (strong | weak for strong, weak in zip(held, weakly))
@@ -283,25 +283,25 @@ class _Solves(NamedTuple):
 
 def _settled_step(jet, y, y_max, last: _Step, bound_multipliers, weight, n_targets, radius, xtol, *, sqp):
     """:func:`_step` with an objective, solved up to three times: one QP in a loop, not
-    three QPs, so the program stays the size it was.
+    three QPs, so the program holds one copy of the QP solver.
 
     A second solve, from the first (its multipliers weight the Hessian of the Lagrangian,
     as :func:`_hessian_multipliers` makes them, and its active rows are the QP's guess),
     runs where the first step is shorter than ``xtol``: the first solve's Hessian takes the
     ``last`` point's multipliers, which after an infeasible (elastic) subproblem are priced
     at sqp.elastic and then fall by orders of magnitude a step; a Hessian that large
-    makes a step short at a point that is not stationary (hs063 stopped after 6 steps,
+    makes a step short at a point that is not stationary (hs063 would stop after 6 steps,
     "infeasible_target", with the objective's gradient 0.3 off the constraints' span).
 
     It also runs where the first step holds limits whose gradients reach into the flat
     directions (:func:`_step`), and takes the floor off along them, as along the targets.
-    The floor made the steps crawl to a degenerate minimum on a limit: min x^4 - (x + y)
-    with x + y at most 1, from (1, -0.5), ended "max_steps_reached" after 100 evaluations,
-    a millionth and a half from (0, 1); hs097 and hs098 from their published start ended at
-    another vertex. Off along a limit, the floor no longer bounds the step away from it, so
-    the second step stands only where its QP was solved and it still holds those limits;
-    else the first step does, or, where that was short, a third solve as the second was
-    before (from the first, with the floor)."""
+    The floor makes the steps crawl to a degenerate minimum on a limit: min x^4 - (x + y)
+    with x + y at most 1, from (1, -0.5), would end "max_steps_reached" after 100
+    evaluations, a millionth and a half from (0, 1); hs097 and hs098 from their published
+    start would end at another vertex. Off along a limit, the floor no longer bounds the
+    step away from it, so the second step stands only where its QP was solved and it still
+    holds those limits; else the first step does, or, where that was short, a third solve
+    from the first with the floor along every limit."""
 
     def solve(solves):
         source = _pick(solves.trips == 0, (last, bound_multipliers), (solves.first, solves.first_bound_multipliers))
