@@ -214,8 +214,8 @@ def test_float32_cylinder_keeps_its_documented_tolerance(polarization, monkeypat
     assert single.dtype == jnp.float32
     error = np.linalg.norm(np.asarray(single, np.float64) - exact, axis=1) / np.linalg.norm(exact, axis=1)
     assert error.max() < FLOAT32_CYLINDER_RTOL
-    # the 4000 points as one partitioned call (cylinder._partitioned), in chunks of 256
-    monkeypatch.setattr(importlib.import_module("magdesign.fields.cylinder"), "PARTITION_CHUNK", 256)
+    # the 4000 points as one partitioned call (_partition._partitioned), in chunks of 256
+    monkeypatch.setattr(importlib.import_module("magdesign.fields._partition"), "PARTITION_CHUNK", 256)
     single = cylinder(jnp.asarray(points, jnp.float32), radius=1.5e-3, height=1e-3, polarization=polarization)
     assert single.dtype == jnp.float32
     error = np.linalg.norm(np.asarray(single, np.float64) - exact, axis=1) / np.linalg.norm(exact, axis=1)

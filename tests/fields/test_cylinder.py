@@ -308,8 +308,7 @@ def test_a_large_call_evaluates_each_point_in_its_own_zone(aspect, monkeypatch):
     test_any_direction_agrees_with_magpylib) and against the same points in small calls,
     which select per point, with and without points on the axis, for values, derivatives
     along the points and the height, and vmap(jacfwd) (one point per lane)."""
-    cylinder_module = importlib.import_module("magdesign.fields.cylinder")
-    monkeypatch.setattr(cylinder_module, "PARTITION_CHUNK", 256)
+    monkeypatch.setattr(importlib.import_module("magdesign.fields._partition"), "PARTITION_CHUNK", 256)
     radius, height = 1e-3, aspect * 1e-3
     polarization = jnp.array([0.7, -0.4, 1.1])
     rng = np.random.default_rng(12)
