@@ -25,6 +25,21 @@ def test_the_subpackages_load_after_a_plain_import():
     assert "module 'magdesign' has no attribute 'nothing'" in missing.stderr
 
 
+def test_importing_every_module_starts_no_jax_backend():
+    """JAX's device count can be set only before its backend starts (the CLI's --devices
+    sets it after importing the package): no module may compute with JAX on import."""
+    code = (
+        "import pkgutil, importlib, jax, magdesign\n"
+        "for m in pkgutil.walk_packages(magdesign.__path__, 'magdesign.'):\n"
+        "    if m.name != 'magdesign.__main__': importlib.import_module(m.name)\n"
+        "jax.config.update('jax_num_cpu_devices', 2)\n"
+        "print(jax.device_count())"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip() == "2"
+
+
 @pytest.mark.parametrize(
     ("model", "message"),
     [

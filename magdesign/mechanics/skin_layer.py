@@ -130,7 +130,9 @@ def make_quadrature(
     s = (0.5 * (hi - lo) * x + 0.5 * (hi + lo)).ravel()
     window = np.array([0.5 * math.erfc((si - s_taper) / taper_width) for si in s])
     weights = (0.5 * (hi - lo) * w).ravel() * window
-    return Quadrature(s=jnp.asarray(s), weights=jnp.asarray(weights))
+    # numpy arrays: building the default at import starts no JAX backend (the CLI sets the
+    # number of CPU devices after import)
+    return Quadrature(s=np.asarray(s, np.float64), weights=np.asarray(weights, np.float64))
 
 
 DEFAULT_QUADRATURE = make_quadrature()
