@@ -88,7 +88,7 @@ def test_polish_equations_and_their_derivatives_match_plain_forward_mode(objecti
     np.testing.assert_allclose(in_z, jax.jacfwd(plain)(z, theta), rtol=1e-13, atol=1e-13)
     # The equations to first order about z, as the implicit derivatives see them: in the
     # root from the jet, in theta through the model's values (and Jacobian) again.
-    linearised = lambda root, theta: _linearised(root, None, (equations, theta, z, jet, jnp.asarray(True)))  # noqa: E731
+    linearised = lambda root, theta: _linearised(equations, z, jet, jnp.asarray(True), root, theta)  # noqa: E731
     for argnum in (0, 1):
         expected = jax.jacfwd(plain, argnums=argnum)(z, theta)
         np.testing.assert_allclose(jax.jacfwd(linearised, argnums=argnum)(z, theta), expected, rtol=1e-13, atol=1e-13)

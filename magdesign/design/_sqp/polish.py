@@ -126,11 +126,10 @@ def _implicit_derivatives(equations, z, jet, theta, usable):
     column that is not finite stays NaN in its own batch member (the caller masks it), not
     an error that would stop the batch. ``usable``: False where z or the equations there
     are not finite; the equations are then zero, and so are the derivatives."""
-    inputs = (equations, theta, z, jet, usable)
-    operator = lx.JacobianLinearOperator(lambda root, _: _linearised(root, None, inputs), z)
+    operator = lx.JacobianLinearOperator(lambda root, _: _linearised(equations, z, jet, usable, root, theta), z)
 
     def column(direction):
-        moved = jax.jvp(lambda t: _linearised(z, None, (equations, t, z, jet, usable)), (theta,), (direction,))[1]
+        moved = jax.jvp(lambda t: _linearised(equations, z, jet, usable, z, t), (theta,), (direction,))[1]
         return -lx.linear_solve(operator, moved, LUOrSVD(), throw=False).value
 
     return jax.vmap(column, out_axes=1)(jnp.eye(theta.shape[0], dtype=theta.dtype))
@@ -156,10 +155,10 @@ def _solvable(equations, z, jet, theta, dz, *, sqp):
     return jnp.concatenate([solvable, jnp.ones(theta.shape[0] - n_rows, bool)])
 
 
-def _linearised(root, _, inputs):
+def _linearised(equations, z, jet, usable, root, theta):
     """The equations to first order in the root about z: exact derivatives at z, in the
-    root from the model's jet there, in theta from :func:`_in_theta`."""
-    equations, theta, z, jet, usable = inputs[:5]
+    root from the model's jet there, in theta from :func:`_in_theta`; zero where not
+    ``usable``."""
     return jnp.where(
         usable, equations.rows(z, _in_theta(equations, z, jet, theta)) + equations.tangent(jet, z, root - z), 0.0
     )
