@@ -15,6 +15,10 @@ and ``c`` its normal; for a magnet it is the frame of :func:`magdesign.fields.cy
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+# Below this angle (rad) rotate_by_vector takes sin(a) / a and (1 - cos a) / a^2 from their
+# series (error below a^4 / 120), where the closed forms lose digits to cancellation.
+ROTATION_SERIES_ANGLE = 1e-4
+
 
 def rotation_matrix(
     alpha: Float[ArrayLike, "..."], beta: Float[ArrayLike, "..."], gamma: Float[ArrayLike, "..."]
@@ -52,3 +56,20 @@ def from_body(matrix: Float[ArrayLike, "3 3"], field: Float[ArrayLike, "... 3"])
     """The vectors ``field`` (any unit, (..., 3)) given in the frame of one body whose
     rotation is ``matrix`` (3, 3), expressed in the scene frame: M^T v."""
     return jnp.einsum("ji,...j->...i", matrix, field)
+
+
+def rotate_by_vector(
+    vector: Float[ArrayLike, "... 3"], rotation_vector: Float[ArrayLike, "... 3"]
+) -> Float[Array, "... 3"]:
+    """``vector`` (any unit, (..., 3)) turned by the angle |w| (rad) about the axis of the
+    rotation vector w (rad, (..., 3)), right-handed (Rodrigues' formula); smooth, with finite
+    derivatives, at w = 0."""
+    v, w = jnp.broadcast_arrays(jnp.asarray(vector, dtype=float), jnp.asarray(rotation_vector, dtype=float))
+    squared = jnp.sum(w * w, axis=-1, keepdims=True)
+    series = squared < ROTATION_SERIES_ANGLE**2
+    safe = jnp.where(series, 1.0, squared)  # the double where: no 0/0 in the unused branch's gradient
+    angle = jnp.sqrt(safe)
+    sine = jnp.where(series, 1.0 - squared / 6.0, jnp.sin(angle) / angle)
+    versine = jnp.where(series, 0.5 - squared / 24.0, (1.0 - jnp.cos(angle)) / safe)
+    cross = jnp.cross(w, v)
+    return v + sine * cross + versine * jnp.cross(w, cross)
