@@ -20,8 +20,9 @@ import jax.numpy as jnp
 import optimistix as optx
 from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
-from magdesign._numerics import safe_div, safe_sqrt
+from magdesign._numerics import safe_sqrt
 from magdesign.inverse._jacobian import LSQ_ATOL, LSQ_RTOL, difference_jacobian
+from magdesign.inverse.resolution import cramer_rao
 from magdesign.scene.core import AbstractScene, chain, parameters, with_parameters
 from magdesign.scene.loads import Loads
 from magdesign.units import SpecError
@@ -95,9 +96,7 @@ def _calibrate(scene, names, loads, readings, noise, max_steps):
     jacobian = jax.jacfwd(residual)(solution.value, None)
     if noise is None:
         scale = safe_sqrt(jnp.sum(r**2) / max(r.size - len(names), 1))
-    _, singular, vt = jnp.linalg.svd(jacobian, full_matrices=False)
-    variance = jnp.einsum("ki,k,ki->i", vt, safe_div(1.0, singular**2), vt)
-    sigma = scale * safe_sqrt(variance)
+    sigma = scale * cramer_rao(jacobian, 1.0).deviation
     fitted = {name: start[name] * solution.value[i] for i, name in enumerate(names)}
     return Calibration(
         values=fitted,

@@ -34,8 +34,8 @@ import jax.numpy as jnp
 import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from magdesign._numerics import safe_div
 from magdesign.inverse._jacobian import FD_JACOBIAN_STEP, LSQ_ATOL, LSQ_RTOL, difference_jacobian
+from magdesign.inverse.resolution import cramer_rao
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 
 # Effects that the static, deterministic forward model of an inverse leaves out: those of the
@@ -70,8 +70,8 @@ class Inversion(eqx.Module):
             change, in noise units, of the least visible displacement step of one
             resolution; < 1 is ill-conditioned.
         uncertainty: (..., 3) standard deviation of each displacement component (m), from
-            the Jacobian, noise^2 (J^T J)^-1; directions with a zero singular value are
-            left out (the status flags them).
+            the Cramer-Rao bound noise^2 (J^T J)^-1 (:func:`magdesign.inverse.cramer_rao`);
+            a direction the readings do not see gets a huge variance (the status flags it).
         chi2: (...) the best fit's sum of squared residuals in noise units (-).
         residual: (..., S, C) readings minus the forward model at the solution.
         steps: (...) solver steps of the best start.
@@ -140,22 +140,21 @@ def _invert(scene, readings, candidates, noise, resolution, starts, solver, max_
         def scaled(v):
             return (forward(v) - target * noise) / noise
 
-        _, singular, vt = jnp.linalg.svd(jax.jacfwd(scaled)(y_best), full_matrices=False)
-        variance = jnp.einsum("ki,k,ki->i", vt, safe_div(1.0, singular**2), vt)
+        bound = cramer_rao(jax.jacfwd(scaled)(y_best), 1.0)
         separation = jnp.sqrt(jnp.sum((y - y_best) ** 2, axis=-1))
         second = jnp.any((chi2 <= NO_MATCH_CHI2) & (separation > 1.0))
         status = InverseStatus.where(
             result == optx.RESULTS.successful, InverseStatus.successful, InverseStatus.not_converged
         )
         status = InverseStatus.where(second, InverseStatus.ambiguous, status)
-        status = InverseStatus.where(singular[-1] < 1.0, InverseStatus.ill_conditioned, status)
+        status = InverseStatus.where(bound.conditioning < 1.0, InverseStatus.ill_conditioned, status)
         status = InverseStatus.where(chi2_best > NO_MATCH_CHI2, InverseStatus.no_match, status)
         return Inversion(
             displacement=y_best * resolution,
             status=status,
             solver_result=result,
-            conditioning=singular[-1],
-            uncertainty=resolution * jnp.sqrt(variance),
+            conditioning=bound.conditioning,
+            uncertainty=resolution * bound.deviation,
             chi2=chi2_best,
             residual=(-scaled(y_best) * noise).reshape(readings.shape[-2:]),
             steps=steps,
