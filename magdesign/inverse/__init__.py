@@ -8,5 +8,3 @@ from magdesign.inverse.displacement import displacement_grid as displacement_gri
 from magdesign.inverse.displacement import forward_readings as forward_readings
 from magdesign.inverse.displacement import invert_displacement as invert_displacement
 from magdesign.inverse.film import film_forces as film_forces
-from magdesign.inverse.resolution import Bound as Bound
-from magdesign.inverse.resolution import cramer_rao as cramer_rao

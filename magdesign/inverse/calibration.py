@@ -22,9 +22,9 @@ from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
 from magdesign._numerics import safe_sqrt
 from magdesign.inverse._jacobian import LSQ_ATOL, LSQ_RTOL, difference_jacobian
-from magdesign.inverse.resolution import cramer_rao
 from magdesign.scene.core import AbstractScene, chain, parameters, with_parameters
 from magdesign.scene.loads import Loads
+from magdesign.transducers.resolution import cramer_rao
 from magdesign.units import SpecError
 
 # Step of the central-difference Jacobian of magdesign.inverse's calibration, in its

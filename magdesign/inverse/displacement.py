@@ -35,8 +35,8 @@ import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
 from magdesign.inverse._jacobian import FD_JACOBIAN_STEP, LSQ_ATOL, LSQ_RTOL, difference_jacobian
-from magdesign.inverse.resolution import cramer_rao
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
+from magdesign.transducers.resolution import cramer_rao
 
 # Effects that the static, deterministic forward model of an inverse leaves out: those of the
 # static chain (noise and the lag are not functions of one displacement), and quantisation,
@@ -70,7 +70,7 @@ class Inversion(eqx.Module):
             change, in noise units, of the least visible displacement step of one
             resolution; < 1 is ill-conditioned.
         uncertainty: (..., 3) standard deviation of each displacement component (m), from
-            the Cramer-Rao bound noise^2 (J^T J)^-1 (:func:`magdesign.inverse.cramer_rao`);
+            the Cramer-Rao bound noise^2 (J^T J)^-1 (:func:`magdesign.transducers.cramer_rao`);
             a direction the readings do not see gets a huge variance (the status flags it).
         chi2: (...) the best fit's sum of squared residuals in noise units (-).
         residual: (..., S, C) readings minus the forward model at the solution.

@@ -14,6 +14,8 @@ from magdesign.transducers.hall import mlx90393 as mlx90393
 from magdesign.transducers.inductor import count_events as count_events
 from magdesign.transducers.inductor import emf as emf
 from magdesign.transducers.inductor import slip_flags as slip_flags
+from magdesign.transducers.resolution import Bound as Bound
+from magdesign.transducers.resolution import cramer_rao as cramer_rao
 from magdesign.transducers.signal import add_noise as add_noise
 from magdesign.transducers.signal import quantise as quantise
 from magdesign.transducers.signal import saturate as saturate

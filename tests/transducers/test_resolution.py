@@ -5,7 +5,7 @@ equally noisy readings."""
 import jax
 import numpy as np
 
-from magdesign.inverse import cramer_rao
+from magdesign.transducers import cramer_rao
 
 
 def test_the_bound_is_the_inverse_fisher_information():

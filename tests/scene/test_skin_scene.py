@@ -1,0 +1,89 @@
+"""The magnetic skin: its field at rest against magpylib's block, the symmetry of a centred
+press, and its resolution outputs against a central-difference Jacobian and numpy's
+inverse of the Fisher information."""
+
+import jax
+import jax.numpy as jnp
+import magpylib
+import numpy as np
+import pytest
+
+from magdesign.scene.core import outputs, simulate
+from magdesign.scene.loads import Loads
+from magdesign.scene.skin_scene import BACKGROUND_REFERENCE, SkinScene
+from magdesign.transducers import mlx90393
+from magdesign.units import mm, uT
+
+CHIPS = np.array([[0.0, 0.0], [6 * mm, 0.0], [-6 * mm, 0.0], [0.0, 6 * mm], [0.0, -6 * mm]])  # ReSkin's cross of five
+
+
+def skin(**changes):
+    values = dict(
+        thickness=jnp.asarray(2 * mm),
+        size=jnp.array([20 * mm, 20 * mm]),
+        polarization=jnp.asarray(0.02),
+        shear_modulus=jnp.asarray(20e3),
+        poisson_ratio=jnp.asarray(0.49),
+        sphere_radius=jnp.asarray(5 * mm),
+        chips=jnp.asarray(CHIPS),
+        depth=jnp.asarray(1 * mm),
+        noise=jnp.full(3, 1 * uT),
+        hall=mlx90393(),
+        effects=(),
+        cells=(8, 8, 1),
+        map_grid=(2, 2),
+    )
+    return SkinScene(**(values | changes))
+
+
+@pytest.fixture(scope="module")
+def pressed():
+    """A sweep from rest to 0.1 N at the centre (the middle chip's axis)."""
+    return simulate(skin(), Loads(jnp.array([0.0, 0.05, 0.1])))
+
+
+def test_at_rest_the_chips_read_the_layers_block(pressed):
+    block = magpylib.magnet.Cuboid(polarization=(0, 0, 0.02), dimension=(20 * mm, 20 * mm, 2 * mm), position=(0, 0, mm))
+    sensors = np.concatenate([CHIPS, np.full((5, 1), -1 * mm)], axis=-1)
+    np.testing.assert_allclose(pressed.readings[0], block.getB(sensors), rtol=1e-9, atol=1e-15)
+
+
+def test_a_centred_press_is_symmetric(pressed):
+    """By symmetry the centre chip sees no in-plane field and the four outer chips the same |B|."""
+    centre = np.asarray(pressed.readings[:, 0])
+    assert np.all(np.abs(centre[:, :2]) < 1e-9 * np.abs(centre[:, 2:]))
+    assert centre[1, 2] != centre[0, 2]
+    # the four outer chips see the same |B| by the cross's symmetry
+    outer = np.linalg.norm(np.asarray(pressed.readings[2, 1:]), axis=-1)
+    np.testing.assert_allclose(outer, outer[0], rtol=1e-9)
+
+
+@pytest.mark.slow  # compiles the Jacobian of every reading through the layer's transforms
+def test_resolution_outputs_against_differences_and_numpys_fisher_inverse():
+    scene = skin(cells=(4, 4, 1))
+    loads = Loads(jnp.array([0.0, 2.0]), shear=jnp.array([[0.0, 0.0], [0.3, 0.0]]))
+    got = outputs(scene, loads)
+    readings = jax.jit(lambda q: scene.readings_at(q).ravel())
+    steps = np.array([1e-6, 1e-6, 1e-4, 1e-4, 1e-4])
+    noise = np.full(15, 1 * uT)
+    localisation, normal, shear, background = [], [], [], []
+    for x, y in np.asarray(scene.map_points()):
+        state = np.array([x, y, 2.0, 0.3, 0.0])
+        columns = []
+        for i, h in enumerate(steps):
+            e = np.zeros(5)
+            e[i] = h
+            columns.append((np.asarray(readings(state + e)) - np.asarray(readings(state - e))) / (2 * h))
+        weighted = np.stack(columns, axis=-1) / noise[:, None]
+        covariance = np.linalg.inv(weighted.T @ weighted)
+        localisation.append(np.sqrt(covariance[0, 0] + covariance[1, 1]))
+        normal.append(np.sqrt(covariance[2, 2]))
+        shear.append(np.sqrt(max(covariance[3, 3], covariance[4, 4])))
+        uniform = np.tile(np.eye(3) * BACKGROUND_REFERENCE, (1, 5)) / noise
+        background.append(np.max(np.abs((covariance @ weighted.T @ uniform.T)[2])))
+    np.testing.assert_allclose(got["localisation_worst"], max(localisation), rtol=1e-4)
+    np.testing.assert_allclose(got["localisation_median"], np.median(localisation), rtol=1e-4)
+    np.testing.assert_allclose(got["force_resolution_normal"], max(normal), rtol=1e-4)
+    np.testing.assert_allclose(got["force_resolution_shear"], max(shear), rtol=1e-4)
+    np.testing.assert_allclose(got["background_force_error"], max(background), rtol=1e-4)
+    assert 0.0 <= float(got["crosstalk"]) <= 1.0 and 0.0 < float(got["saturation_ratio"]) < 1.0
