@@ -1,6 +1,6 @@
 """The ``magdesign`` command (also ``python -m magdesign``).
 
-    magdesign solve [SPEC.toml] [--json] [--fidelity LEVEL] [--plot FILE] [--write FILE] [--timing]
+    magdesign solve [SPEC.toml] [--json] [--fidelity LEVEL | --accuracy TOL] [--plot FILE] [--write FILE] [--timing]
     magdesign simulate SPEC.toml [--json]
     magdesign accuracy [--quick] [--json] [--plot FILE]
     magdesign show SPEC.toml --plot FILE
@@ -63,6 +63,7 @@ from magdesign.spec.design import (
     problem_from_spec,
     stated_value,
 )
+from magdesign.spec.levels import estimate, levels_of, levels_text, parse_accuracy, solve_to_accuracy
 from magdesign.spec.scene import scene_from_spec
 from magdesign.spec.sizes import check_fits
 from magdesign.spec.sweep import input_units, sweep_points
@@ -154,6 +155,13 @@ def build_parser():
         help="auto (default): solve at the spec's levels, then confirm from that answer with the "
         "exact dome (axisymmetric) and field (exact) models, and report both; or one mechanics "
         "level for every solve (e.g. reissner, axisymmetric)",
+    )
+    solve.add_argument(
+        "--accuracy",
+        metavar="TOL",
+        help="a relative accuracy (1%% or 0.01): start every model at its cheapest level and raise "
+        "each model whose estimated error of a target or limit is larger, until every one is within "
+        "it (exit 3 where a model at its finest level is not); not with --fidelity",
     )
     solve.add_argument("--plot", metavar="FILE", help="write a PNG of the targets and limits around the design")
     solve.add_argument(
@@ -300,12 +308,82 @@ def _designed(spec, path):
 def run_solve(args):
     began = time.perf_counter()
     spec = load_spec(args.spec) if args.spec else default_spec()
+    accuracy = None if args.accuracy is None else parse_accuracy(args.accuracy)
     auto = args.fidelity in (None, "auto")
+    if accuracy is not None and not auto:
+        raise SpecError("--accuracy: it picks every model's level itself; give --accuracy or --fidelity, not both")
     problem, _ = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
     if "tolerances" in spec.get("design", {}):  # read by the tolerance command: one rule for both
         with warnings.catch_warnings():  # the spec's warnings are said once, above
             warnings.simplefilter("ignore")
             tolerance_problem_from_spec(spec, fidelity=None if auto else args.fidelity)
+    start = accurate = None
+    if accuracy is not None:
+        stage(f"solving to an accuracy of {accuracy:.3g}, every model from its cheapest level ({FIRST_CALL})")
+        accurate = solve_to_accuracy(spec, accuracy=accuracy)
+        answers = [(levels, None, answer) for levels, answer in accurate.answers]
+        problem, result = accurate.problem, accurate.result
+        levels = answers[-1][0]
+    else:
+        answers, levels, result = _solve_at_levels(args, spec, problem, auto)
+        problem = answers[-1][1]
+        if len(answers) > 1:
+            start = {v.name: answers[0][2].parameters[v.name] for v in problem.variables}
+            start = {v.name: min(max(start[v.name], float(v.lower)), float(v.upper)) for v in problem.variables}
+    estimates = _estimates(result.source, result, accurate)
+    if args.timing:
+        stage(f"--timing: solving again at {levels}, warm")
+    warm = solve_problem(problem, start=start) if args.timing else None
+    if args.json:
+        document = {**result.to_json(), "fidelity": levels, "objective": _objective(problem, result)}
+        if len(answers) > 1:
+            cheap = answers[0]
+            document["first_level"] = {**cheap[2].to_json(), "fidelity": cheap[0]}
+        document.update(estimates_json(result.source, estimates))
+        if accurate is not None:
+            document["accuracy"] = {"asked": accuracy, "reached": accurate.reached, "why": accurate.why}
+        if warm is not None:
+            document["warm_seconds"] = warm.seconds
+        document["total_seconds"] = time.perf_counter() - began
+        print(json_text(document))
+    else:
+        print(_designed(spec, args.spec))
+        for index, (name, _, answer) in enumerate(answers):
+            role = "the answer" if index == len(answers) - 1 else "first answer, confirmed below"
+            print(f"{name} ({role}):")
+            print(answer.table())
+            print(
+                f"   that solve took {answer.seconds:.3g} s (first call: tracing, and compiling or loading from the cache, included)\n"
+            )
+        if len(answers) > 1:
+            print(_difference(answers[0][2], result, answers[0][0], levels))
+        if estimates is not None:
+            print(estimates_text(result.source, estimates, result.outputs, result.units))
+        if accurate is not None:
+            print(
+                f"accuracy {accuracy:.3g}: reached at {levels}"
+                if accurate.reached
+                else f"accuracy {accuracy:.3g}: NOT reached: {accurate.why}"
+            )
+        if warm is not None:
+            print(f"warm solve at {levels}: {warm.seconds * 1e3:.3g} ms")
+        print(f"total time: {time.perf_counter() - began:.3g} s")
+    if accurate is not None and not accurate.reached:
+        print(f"magdesign solve: accuracy {accuracy:.3g} not reached: {accurate.why}", file=sys.stderr)
+    if args.write:
+        _write_answer(args, result)
+    if args.plot:
+        stage(f"writing {args.plot}: each target and limit along each variable, at {levels}")
+        plot_design(problem, result, args.plot)
+        wrote(args.plot)
+    reached = accurate is None or accurate.reached
+    return 0 if result.status == "successful" and reached else EXIT_NOT_SOLVED
+
+
+def _solve_at_levels(args, spec, problem, auto):
+    """([(levels, problem, result)] of the solve at the spec's levels (or --fidelity's) and,
+    with --fidelity auto, its confirmation at the exact levels from that answer; the last
+    answer's levels; the last answer)."""
     levels = _levels_at(spec, None if auto else args.fidelity)
     stage(f"solving at {levels} ({FIRST_CALL})")
     first = solve_problem(problem)
@@ -322,42 +400,39 @@ def run_solve(args):
         start = {
             v.name: min(max(first.parameters[v.name], float(v.lower)), float(v.upper)) for v in exact_problem.variables
         }
-        confirmed = solve_problem(exact_problem, start=start)
-        answers.append((confirming, exact_problem, confirmed))
-    levels, problem, result = answers[-1]
-    if args.timing:
-        stage(f"--timing: solving again at {levels}, warm")
-    warm = solve_problem(problem, start=start if exact else None) if args.timing else None
-    if args.json:
-        document = {**result.to_json(), "fidelity": levels, "objective": _objective(problem, result)}
-        if exact is not None:
-            cheap = answers[0]
-            document["first_level"] = {**cheap[2].to_json(), "fidelity": cheap[0]}
-        if warm is not None:
-            document["warm_seconds"] = warm.seconds
-        document["total_seconds"] = time.perf_counter() - began
-        print(json_text(document))
-    else:
-        print(_designed(spec, args.spec))
-        for index, (name, _, answer) in enumerate(answers):
-            role = "the answer" if index == len(answers) - 1 else "first answer, confirmed below"
-            print(f"{name} ({role}):")
-            print(answer.table())
-            print(
-                f"   that solve took {answer.seconds:.3g} s (first call: tracing, and compiling or loading from the cache, included)\n"
-            )
-        if exact is not None:
-            print(_difference(answers[0][2], result, answers[0][0], levels))
-        if warm is not None:
-            print(f"warm solve at {levels}: {warm.seconds * 1e3:.3g} ms")
-        print(f"total time: {time.perf_counter() - began:.3g} s")
-    if args.write:
-        _write_answer(args, result)
-    if args.plot:
-        stage(f"writing {args.plot}: each target and limit along each variable, at {levels}")
-        plot_design(problem, result, args.plot)
-        wrote(args.plot)
-    return 0 if result.status == "successful" else EXIT_NOT_SOLVED
+        answers.append((confirming, exact_problem, solve_problem(exact_problem, start=start)))
+    return answers, answers[-1][0], answers[-1][2]
+
+
+def _estimates(spec, result, accurate):
+    """The error estimates of ``result``'s outputs (:func:`magdesign.spec.levels.estimate`):
+    those of the accuracy run, else found here; None where the answer is not finite."""
+    if accurate is not None:
+        return accurate.estimates if accurate.estimates.outputs or accurate.estimates.failed else None
+    if not all(math.isfinite(value) for value in result.parameters.values()):
+        return None
+    stage(f"estimating each output's error: each model one level finer ({FIRST_CALL})")
+    return estimate(spec, result.parameters, base=result.outputs)
+
+
+def estimates_json(spec, estimates) -> dict:
+    """The JSON keys of the error estimates at ``spec``'s levels: "levels" {model: level},
+    "estimates" {output: {"absolute", "relative", "model"}}, "estimate_failures" {model: why}."""
+    return {
+        "levels": levels_of(spec),
+        "estimates": {} if estimates is None else estimates.to_json(),
+        "estimate_failures": {} if estimates is None else dict(estimates.failed),
+    }
+
+
+def estimates_text(spec, estimates, values, units) -> str:
+    """The lines of the error estimates at ``spec``'s levels, for a report."""
+    head = f"levels: {levels_text(spec)}"
+    if not estimates.against:
+        return head + " (no model with a finer level: no error estimates)"
+    against = ", ".join(f"{model} {level}" for model, level in estimates.against.items())
+    lines = estimates.lines(values, units)
+    return "\n".join([f"{head}; each output's estimated error, from one model at a time at {against}:", *lines])
 
 
 def _levels_at(spec, fidelity):
@@ -484,10 +559,19 @@ def run_simulate(args):
     warn_if_clipping(scene, result)
     # the outputs read no reading after the reading effects: the noisy simulation gives them too
     values = {name: float(value) for name, value in scene.outputs(result).items()}
+    # one more evaluation of the outputs per model, at its next level (noiseless, as the outputs are)
+    stage("estimating each output's error: each model one level finer")
+    estimates = estimate(spec, start, base=values)
     if args.json:
         print(
             json_text(
-                {**simulation_json(result), "start": start, "outputs": values, "output_units": scene.output_units}
+                {
+                    **simulation_json(result),
+                    "start": start,
+                    "outputs": values,
+                    "output_units": scene.output_units,
+                    **estimates_json(spec, estimates),
+                }
             )
         )
     else:
@@ -506,6 +590,8 @@ def run_simulate(args):
                 if math.isfinite(value)
             )
         )
+        units = {name: unit.removeprefix("1") or None for name, unit in scene.output_units.items()}
+        print(estimates_text(spec, estimates, values, units))
     return 0 if bool(result.converged.all()) else EXIT_NOT_SOLVED
 
 
