@@ -63,7 +63,7 @@ from magdesign.spec.design import (
     problem_from_spec,
     stated_value,
 )
-from magdesign.spec.levels import estimate, levels_of, levels_text, parse_accuracy, solve_to_accuracy
+from magdesign.spec.levels import estimate, estimates_json, estimates_text, parse_accuracy, solve_to_accuracy
 from magdesign.spec.scene import scene_from_spec
 from magdesign.spec.sizes import check_fits
 from magdesign.spec.sweep import input_units, sweep_points
@@ -159,9 +159,8 @@ def build_parser():
     solve.add_argument(
         "--accuracy",
         metavar="TOL",
-        help="a relative accuracy (1%% or 0.01): start every model at its cheapest level and raise "
-        "each model whose estimated error of a target or limit is larger, until every one is within "
-        "it (exit 3 where a model at its finest level is not); not with --fidelity",
+        help="a relative accuracy (1%% or 0.01): each model from its cheapest level up until every "
+        "target's and limit's estimated error is within it (else exit 3); not with --fidelity",
     )
     solve.add_argument("--plot", metavar="FILE", help="write a PNG of the targets and limits around the design")
     solve.add_argument(
@@ -321,16 +320,11 @@ def run_solve(args):
     if accuracy is not None:
         stage(f"solving to an accuracy of {accuracy:.3g}, every model from its cheapest level ({FIRST_CALL})")
         accurate = solve_to_accuracy(spec, accuracy=accuracy)
-        answers = [(levels, None, answer) for levels, answer in accurate.answers]
-        problem, result = accurate.problem, accurate.result
-        levels = answers[-1][0]
+        answers = [(levels, accurate.problem, answer) for levels, answer in accurate.answers]
     else:
-        answers, levels, result = _solve_at_levels(args, spec, problem, auto)
-        problem = answers[-1][1]
-        if len(answers) > 1:
-            start = {v.name: answers[0][2].parameters[v.name] for v in problem.variables}
-            start = {v.name: min(max(start[v.name], float(v.lower)), float(v.upper)) for v in problem.variables}
-    estimates = _estimates(result.source, result, accurate)
+        answers, start = _solve_at_levels(args, spec, problem, auto)
+    levels, problem, result = answers[-1]
+    estimates = _estimates(result, accurate)
     if args.timing:
         stage(f"--timing: solving again at {levels}, warm")
     warm = solve_problem(problem, start=start) if args.timing else None
@@ -360,16 +354,12 @@ def run_solve(args):
         if estimates is not None:
             print(estimates_text(result.source, estimates, result.outputs, result.units))
         if accurate is not None:
-            print(
-                f"accuracy {accuracy:.3g}: reached at {levels}"
-                if accurate.reached
-                else f"accuracy {accuracy:.3g}: NOT reached: {accurate.why}"
-            )
+            print(accurate.verdict)
         if warm is not None:
             print(f"warm solve at {levels}: {warm.seconds * 1e3:.3g} ms")
         print(f"total time: {time.perf_counter() - began:.3g} s")
     if accurate is not None and not accurate.reached:
-        print(f"magdesign solve: accuracy {accuracy:.3g} not reached: {accurate.why}", file=sys.stderr)
+        print(f"magdesign solve: {accurate.verdict}", file=sys.stderr)
     if args.write:
         _write_answer(args, result)
     if args.plot:
@@ -381,9 +371,8 @@ def run_solve(args):
 
 
 def _solve_at_levels(args, spec, problem, auto):
-    """([(levels, problem, result)] of the solve at the spec's levels (or --fidelity's) and,
-    with --fidelity auto, its confirmation at the exact levels from that answer; the last
-    answer's levels; the last answer)."""
+    """([(levels, problem, result)] of the solve at the spec's (or --fidelity's) levels and, with
+    --fidelity auto, its confirmation at the exact levels; the confirmation's start or None)."""
     levels = _levels_at(spec, None if auto else args.fidelity)
     stage(f"solving at {levels} ({FIRST_CALL})")
     first = solve_problem(problem)
@@ -392,47 +381,25 @@ def _solve_at_levels(args, spec, problem, auto):
     if exact is not None and not all(math.isfinite(value) for value in first.parameters.values()):
         print("magdesign solve: the first answer is not finite; no confirmation at the exact levels", file=sys.stderr)
         exact = None
-    if exact is not None:
-        # Confirm at the exact levels, from the cheap answer: a few steps of the costly model.
-        exact_problem, _ = problem_from_spec(exact)
-        confirming = fidelity_levels(exact)
-        stage(f"confirming at the exact levels, {confirming}, from that answer ({FIRST_CALL})")
-        start = {
-            v.name: min(max(first.parameters[v.name], float(v.lower)), float(v.upper)) for v in exact_problem.variables
-        }
-        answers.append((confirming, exact_problem, solve_problem(exact_problem, start=start)))
-    return answers, answers[-1][0], answers[-1][2]
-
-
-def _estimates(spec, result, accurate):
-    """The error estimates of ``result``'s outputs (:func:`magdesign.spec.levels.estimate`):
-    those of the accuracy run, else found here; None where the answer is not finite."""
-    if accurate is not None:
-        return accurate.estimates if accurate.estimates.outputs or accurate.estimates.failed else None
-    if not all(math.isfinite(value) for value in result.parameters.values()):
-        return None
-    stage(f"estimating each output's error: each model one level finer ({FIRST_CALL})")
-    return estimate(spec, result.parameters, base=result.outputs)
-
-
-def estimates_json(spec, estimates) -> dict:
-    """The JSON keys of the error estimates at ``spec``'s levels: "levels" {model: level},
-    "estimates" {output: {"absolute", "relative", "model"}}, "estimate_failures" {model: why}."""
-    return {
-        "levels": levels_of(spec),
-        "estimates": {} if estimates is None else estimates.to_json(),
-        "estimate_failures": {} if estimates is None else dict(estimates.failed),
+    if exact is None:
+        return answers, None
+    # Confirm at the exact levels, from the cheap answer: a few steps of the costly model.
+    exact_problem, _ = problem_from_spec(exact)
+    confirming = fidelity_levels(exact)
+    stage(f"confirming at the exact levels, {confirming}, from that answer ({FIRST_CALL})")
+    start = {
+        v.name: min(max(first.parameters[v.name], float(v.lower)), float(v.upper)) for v in exact_problem.variables
     }
+    answers.append((confirming, exact_problem, solve_problem(exact_problem, start=start)))
+    return answers, start
 
 
-def estimates_text(spec, estimates, values, units) -> str:
-    """The lines of the error estimates at ``spec``'s levels, for a report."""
-    head = f"levels: {levels_text(spec)}"
-    if not estimates.against:
-        return head + " (no model with a finer level: no error estimates)"
-    against = ", ".join(f"{model} {level}" for model, level in estimates.against.items())
-    lines = estimates.lines(values, units)
-    return "\n".join([f"{head}; each output's estimated error, from one model at a time at {against}:", *lines])
+def _estimates(result, accurate):
+    """``result``'s error estimates: the accuracy run's, else found here; None where not finite."""
+    if accurate is not None or not all(math.isfinite(value) for value in result.parameters.values()):
+        return accurate and accurate.estimates
+    stage(f"estimating each output's error: each model one level finer ({FIRST_CALL})")
+    return estimate(result.source, result.parameters, base=result.outputs)
 
 
 def _levels_at(spec, fidelity):
@@ -563,17 +530,8 @@ def run_simulate(args):
     stage("estimating each output's error: each model one level finer")
     estimates = estimate(spec, start, base=values)
     if args.json:
-        print(
-            json_text(
-                {
-                    **simulation_json(result),
-                    "start": start,
-                    "outputs": values,
-                    "output_units": scene.output_units,
-                    **estimates_json(spec, estimates),
-                }
-            )
-        )
+        document = {**simulation_json(result), "start": start, "outputs": values, "output_units": scene.output_units}
+        print(json_text({**document, **estimates_json(spec, estimates)}))
     else:
         unstated = {name: value for name, value in start.items() if stated_value(spec, name) is None}
         if unstated:

@@ -184,8 +184,8 @@ def _neighbour(spec, ladder):
     return at_level(spec, ladder, coarser[-1]), False
 
 
-# Roache's safety factor for a grid convergence index from two grids ("Perspective: a method
-# for uniform reporting of grid refinement studies", 1994).
+# The safety factor of a grid convergence index from two grids: Roache, "Perspective: a
+# method for uniform reporting of grid refinement studies" (1994).
 GCI_SAFETY = 3.0
 
 
@@ -229,7 +229,8 @@ class Estimate(NamedTuple):
 
 class Estimates(NamedTuple):
     """The error estimates at one point of a spec: ``outputs`` {output: :class:`Estimate`}
-    (the largest move over the models), ``by_model`` {model: {output: |move| (SI)}},
+    (the largest over the models), ``by_model`` {model: {output: its estimate from that
+    model (SI)}},
     ``against`` {model: the level it was compared with, in words}, ``failed`` {model: why
     its neighbouring level gave no estimate}."""
 
@@ -312,6 +313,26 @@ def estimate(spec: dict, values: Mapping[str, float] | None = None, base: Mappin
     return Estimates(estimates, by_model, against, failed)
 
 
+def estimates_json(spec, estimates) -> dict:
+    """The JSON keys of the error estimates at ``spec``'s levels: "levels" {model: level},
+    "estimates" {output: {"absolute", "relative", "model"}}, "estimate_failures" {model: why}."""
+    return {
+        "levels": levels_of(spec),
+        "estimates": {} if estimates is None else estimates.to_json(),
+        "estimate_failures": {} if estimates is None else dict(estimates.failed),
+    }
+
+
+def estimates_text(spec, estimates, values, units) -> str:
+    """The lines of the error estimates at ``spec``'s levels, for a report."""
+    head = f"levels: {levels_text(spec)}"
+    if not estimates.against:
+        return head + " (no model with a finer level: no error estimates)"
+    against = ", ".join(f"{model} {level}" for model, level in estimates.against.items())
+    lines = estimates.lines(values, units)
+    return "\n".join([f"{head}; each output's estimated error, from one model at a time at {against}:", *lines])
+
+
 def _allowed(problem, result, accuracy):
     """{output: the largest error (SI) ``accuracy`` allows} of the problem's targets (of
     the target's value, or its scale for a target of 0) and limits (of the nearest bound, or the limit's scale where that
@@ -369,6 +390,14 @@ class AccurateDesign(NamedTuple):
     reached: bool
     why: str
     answers: list
+
+    @property
+    def verdict(self) -> str:
+        """One line: "accuracy 0.01: reached at dome axisymmetric 2x16", or "accuracy 1e-09:
+        NOT reached: <why>"."""
+        if self.reached:
+            return f"accuracy {self.accuracy:.3g}: reached at {self.answers[-1][0]}"
+        return f"accuracy {self.accuracy:.3g}: NOT reached: {self.why}"
 
 
 def _cheapest(spec, ladder):
