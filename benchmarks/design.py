@@ -1,11 +1,15 @@
 """Speed of the design solver on the default design, and its QP subproblem. Run by hand:
 
-    .venv/bin/python benchmarks/design.py [--skip-axisymmetric]
+    .venv/bin/python benchmarks/design.py [--skip-axisymmetric] [--accuracy-only]
 
 Prints:
 - the default design (the spec `magdesign solve` runs with no argument, its scene model):
   first call (compile included) and the median warm time of one solve, at the Reissner
   dome level and, unless skipped, the axisymmetric one;
+- what `magdesign solve --accuracy` costs on the default design against solves at fixed
+  levels: the first call (compiles included) and a second, warm one of
+  :func:`magdesign.spec.levels.solve_to_accuracy` at 10 % and 1 %, with the levels it ends at
+  (``--accuracy-only``: these rows alone);
 - the same first call at the Reissner level in new processes, as `magdesign solve` makes it:
   on an empty persistent cache, and three times with the cache the first run filled;
 - where that first call goes, in a new process without the cache: the seconds (wall and
@@ -40,6 +44,7 @@ from magdesign.design._sqp.jet import _jet, problem_arrays
 from magdesign.design._sqp.step import _no_slack_rows, subproblem, subproblem_box
 from magdesign.mechanics import MooneyRivlin
 from magdesign.spec.design import default_spec, problem_from_spec
+from magdesign.spec.levels import levels_text, solve_to_accuracy
 from magdesign.units import mm, mT
 
 sys.path.insert(0, "tests/design")
@@ -79,6 +84,7 @@ import time
 from magdesign.cli import use_compilation_cache
 from magdesign.design import solve
 from magdesign.spec.design import default_spec, problem_from_spec
+from magdesign.spec.levels import levels_text, solve_to_accuracy
 use_compilation_cache()
 problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
 began = time.perf_counter()
@@ -96,6 +102,7 @@ from magdesign.design.solve import DESIGN_ATOL, DESIGN_RTOL
 from magdesign._tracing import errors_as_nan, gc_paused
 from magdesign.design._sqp.program import _compiled, _host, _structure, settings_of
 from magdesign.spec.design import default_spec, problem_from_spec
+from magdesign.spec.levels import levels_text, solve_to_accuracy
 problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
 settings = settings_of(DESIGN_RTOL, DESIGN_ATOL, 100)
 key, arrays = _structure(problem, settings)
@@ -309,7 +316,38 @@ def qp_rows():
     table(rows)
 
 
+def accuracy_rows():
+    rows = [("default design", "first call (s)", "warm (s)", "levels at the end", "solves", "reached")]
+    for level in ("reissner", "axisymmetric"):
+        spec = default_spec()
+        spec["mechanics"]["fidelity"] = level
+        problem, _ = problem_from_spec(spec)
+        _, first_s, warm_s = timed_solves(problem, 1)
+        rows.append((f"fixed levels, {level} dome", f"{first_s:.1f}", f"{warm_s:.2f}", levels_text(spec), 1, ""))
+    for accuracy in (0.1, 0.01):
+        times = []
+        for _ in range(2):
+            began = time.perf_counter()
+            run = solve_to_accuracy(default_spec(), accuracy=accuracy)
+            times.append(time.perf_counter() - began)
+        rows.append(
+            (
+                f"--accuracy {accuracy:.0%}",
+                f"{times[0]:.1f}",
+                f"{times[1]:.2f}",
+                levels_text(run.spec),
+                len(run.answers),
+                run.reached,
+            )
+        )
+    table(rows)
+
+
 def main():
+    accuracy_rows()
+    if "--accuracy-only" in sys.argv:
+        return
+    print()
     design_rows("--skip-axisymmetric" in sys.argv)
     print()
     fresh_process_rows()

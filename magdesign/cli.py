@@ -1,6 +1,6 @@
 """The ``magdesign`` command (also ``python -m magdesign``).
 
-    magdesign solve [SPEC.toml] [--json] [--fidelity LEVEL] [--plot FILE] [--write FILE] [--timing]
+    magdesign solve [SPEC.toml] [--json] [--fidelity LEVEL | --accuracy TOL] [--plot FILE] [--write FILE] [--timing]
     magdesign simulate SPEC.toml [--json]
     magdesign accuracy [--quick] [--json] [--plot FILE]
     magdesign show SPEC.toml --plot FILE
@@ -63,6 +63,7 @@ from magdesign.spec.design import (
     problem_from_spec,
     stated_value,
 )
+from magdesign.spec.levels import estimate, estimates_json, estimates_text, parse_accuracy, solve_to_accuracy
 from magdesign.spec.scene import scene_from_spec
 from magdesign.spec.sizes import check_fits
 from magdesign.spec.sweep import input_units, sweep_points
@@ -154,6 +155,12 @@ def build_parser():
         help="auto (default): solve at the spec's levels, then confirm from that answer with the "
         "exact dome (axisymmetric) and field (exact) models, and report both; or one mechanics "
         "level for every solve (e.g. reissner, axisymmetric)",
+    )
+    solve.add_argument(
+        "--accuracy",
+        metavar="TOL",
+        help="a relative accuracy (1%% or 0.01): each model from its cheapest level up until every "
+        "target's and limit's estimated error is within it (else exit 3); not with --fidelity",
     )
     solve.add_argument("--plot", metavar="FILE", help="write a PNG of the targets and limits around the design")
     solve.add_argument(
@@ -300,39 +307,35 @@ def _designed(spec, path):
 def run_solve(args):
     began = time.perf_counter()
     spec = load_spec(args.spec) if args.spec else default_spec()
+    accuracy = None if args.accuracy is None else parse_accuracy(args.accuracy)
     auto = args.fidelity in (None, "auto")
+    if accuracy is not None and not auto:
+        raise SpecError("--accuracy: it picks every model's level itself; give --accuracy or --fidelity, not both")
     problem, _ = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
     if "tolerances" in spec.get("design", {}):  # read by the tolerance command: one rule for both
         with warnings.catch_warnings():  # the spec's warnings are said once, above
             warnings.simplefilter("ignore")
             tolerance_problem_from_spec(spec, fidelity=None if auto else args.fidelity)
-    levels = _levels_at(spec, None if auto else args.fidelity)
-    stage(f"solving at {levels} ({FIRST_CALL})")
-    first = solve_problem(problem)
-    answers = [(levels, problem, first)]
-    exact = exact_levels(spec) if auto else None
-    if exact is not None and not all(math.isfinite(value) for value in first.parameters.values()):
-        print("magdesign solve: the first answer is not finite; no confirmation at the exact levels", file=sys.stderr)
-        exact = None
-    if exact is not None:
-        # Confirm at the exact levels, from the cheap answer: a few steps of the costly model.
-        exact_problem, _ = problem_from_spec(exact)
-        confirming = fidelity_levels(exact)
-        stage(f"confirming at the exact levels, {confirming}, from that answer ({FIRST_CALL})")
-        start = {
-            v.name: min(max(first.parameters[v.name], float(v.lower)), float(v.upper)) for v in exact_problem.variables
-        }
-        confirmed = solve_problem(exact_problem, start=start)
-        answers.append((confirming, exact_problem, confirmed))
+    start = accurate = None
+    if accuracy is not None:
+        stage(f"solving to an accuracy of {accuracy:.3g}, every model from its cheapest level ({FIRST_CALL})")
+        accurate = solve_to_accuracy(spec, accuracy=accuracy)
+        answers = [(levels, accurate.problem, answer) for levels, answer in accurate.answers]
+    else:
+        answers, start = _solve_at_levels(args, spec, problem, auto)
     levels, problem, result = answers[-1]
+    estimates = _estimates(result, accurate)
     if args.timing:
         stage(f"--timing: solving again at {levels}, warm")
-    warm = solve_problem(problem, start=start if exact else None) if args.timing else None
+    warm = solve_problem(problem, start=start) if args.timing else None
     if args.json:
         document = {**result.to_json(), "fidelity": levels, "objective": _objective(problem, result)}
-        if exact is not None:
+        if len(answers) > 1:
             cheap = answers[0]
             document["first_level"] = {**cheap[2].to_json(), "fidelity": cheap[0]}
+        document.update(estimates_json(result.source, estimates))
+        if accurate is not None:
+            document["accuracy"] = {"asked": accuracy, "reached": accurate.reached, "why": accurate.why}
         if warm is not None:
             document["warm_seconds"] = warm.seconds
         document["total_seconds"] = time.perf_counter() - began
@@ -346,18 +349,57 @@ def run_solve(args):
             print(
                 f"   that solve took {answer.seconds:.3g} s (first call: tracing, and compiling or loading from the cache, included)\n"
             )
-        if exact is not None:
+        if len(answers) > 1:
             print(_difference(answers[0][2], result, answers[0][0], levels))
+        if estimates is not None:
+            print(estimates_text(result.source, estimates, result.outputs, result.units))
+        if accurate is not None:
+            print(accurate.verdict)
         if warm is not None:
             print(f"warm solve at {levels}: {warm.seconds * 1e3:.3g} ms")
         print(f"total time: {time.perf_counter() - began:.3g} s")
+    if accurate is not None and not accurate.reached:
+        print(f"magdesign solve: {accurate.verdict}", file=sys.stderr)
     if args.write:
         _write_answer(args, result)
     if args.plot:
         stage(f"writing {args.plot}: each target and limit along each variable, at {levels}")
         plot_design(problem, result, args.plot)
         wrote(args.plot)
-    return 0 if result.status == "successful" else EXIT_NOT_SOLVED
+    reached = accurate is None or accurate.reached
+    return 0 if result.status == "successful" and reached else EXIT_NOT_SOLVED
+
+
+def _solve_at_levels(args, spec, problem, auto):
+    """([(levels, problem, result)] of the solve at the spec's (or --fidelity's) levels and, with
+    --fidelity auto, its confirmation at the exact levels; the confirmation's start or None)."""
+    levels = _levels_at(spec, None if auto else args.fidelity)
+    stage(f"solving at {levels} ({FIRST_CALL})")
+    first = solve_problem(problem)
+    answers = [(levels, problem, first)]
+    exact = exact_levels(spec) if auto else None
+    if exact is not None and not all(math.isfinite(value) for value in first.parameters.values()):
+        print("magdesign solve: the first answer is not finite; no confirmation at the exact levels", file=sys.stderr)
+        exact = None
+    if exact is None:
+        return answers, None
+    # Confirm at the exact levels, from the cheap answer: a few steps of the costly model.
+    exact_problem, _ = problem_from_spec(exact)
+    confirming = fidelity_levels(exact)
+    stage(f"confirming at the exact levels, {confirming}, from that answer ({FIRST_CALL})")
+    start = {
+        v.name: min(max(first.parameters[v.name], float(v.lower)), float(v.upper)) for v in exact_problem.variables
+    }
+    answers.append((confirming, exact_problem, solve_problem(exact_problem, start=start)))
+    return answers, start
+
+
+def _estimates(result, accurate):
+    """``result``'s error estimates: the accuracy run's, else found here; None where not finite."""
+    if accurate is not None or not all(math.isfinite(value) for value in result.parameters.values()):
+        return accurate and accurate.estimates
+    stage(f"estimating each output's error: each model one level finer ({FIRST_CALL})")
+    return estimate(result.source, result.parameters, base=result.outputs)
 
 
 def _levels_at(spec, fidelity):
@@ -484,12 +526,12 @@ def run_simulate(args):
     warn_if_clipping(scene, result)
     # the outputs read no reading after the reading effects: the noisy simulation gives them too
     values = {name: float(value) for name, value in scene.outputs(result).items()}
+    # one more evaluation of the outputs per model, at its next level (noiseless, as the outputs are)
+    stage("estimating each output's error: each model one level finer")
+    estimates = estimate(spec, start, base=values)
     if args.json:
-        print(
-            json_text(
-                {**simulation_json(result), "start": start, "outputs": values, "output_units": scene.output_units}
-            )
-        )
+        document = {**simulation_json(result), "start": start, "outputs": values, "output_units": scene.output_units}
+        print(json_text({**document, **estimates_json(spec, estimates)}))
     else:
         unstated = {name: value for name, value in start.items() if stated_value(spec, name) is None}
         if unstated:
@@ -506,6 +548,8 @@ def run_simulate(args):
                 if math.isfinite(value)
             )
         )
+        units = {name: unit.removeprefix("1") or None for name, unit in scene.output_units.items()}
+        print(estimates_text(spec, estimates, values, units))
     return 0 if bool(result.converged.all()) else EXIT_NOT_SOLVED
 
 

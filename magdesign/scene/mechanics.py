@@ -14,6 +14,7 @@ from jaxtyping import Array, Bool, Float
 
 from magdesign import mechanics
 from magdesign.mechanics import AbstractMaterial, LinearElastic, MooneyRivlin, NeoHookean
+from magdesign.mechanics.dome import DEFAULT_MESH
 from magdesign.scene.loads import Loads
 
 # Spec names (under [mechanics]) of each material's parameters, and their accessors.
@@ -74,7 +75,8 @@ class Dome(AbstractMechanics):
 
     The apex moves by -C(F) F along z, C the secant compliance of
     :func:`magdesign.mechanics.dome_compliance` at that force (every force of a sweep
-    found on one followed path; ``throw=False``: its result becomes the converged flag). A
+    found on one followed path; ``throw=False``: its result becomes the converged flag), on
+    ``mesh`` (elements through the wall, along the meridian; the axisymmetric level only). A
     dome carries no modelled shear: shear loads do not move it.
     """
 
@@ -83,6 +85,7 @@ class Dome(AbstractMechanics):
     material: AbstractMaterial
     fidelity: str = eqx.field(static=True)
     base: str = eqx.field(static=True)
+    mesh: tuple[int, int] = eqx.field(static=True, default=DEFAULT_MESH)
 
     PARAMETERS: ClassVar = {
         "mechanics.outer_radius": lambda m: m.outer_radius,
@@ -97,6 +100,7 @@ class Dome(AbstractMechanics):
             max_force=force,
             fidelity=self.fidelity,
             base=self.base,
+            mesh=self.mesh,
             throw=False,
         )
         return compliance, result == mechanics.DomeResult.successful

@@ -399,6 +399,13 @@ def _keys():
             },
         ),
         Key(
+            "mechanics.mesh",
+            "integers",
+            "the axisymmetric dome's elements [through the wall, along the meridian]",
+            default=[2, 16],
+            length=2,
+        ),
+        Key(
             "mechanics.base",
             "choice",
             "how the dome's rim is held",

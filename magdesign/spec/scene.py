@@ -20,6 +20,7 @@ from magdesign.fields.cylinder import FIDELITIES as CYLINDER_FIDELITIES
 from magdesign.fields.soft import SIZE_LENGTHS, size_keywords, soft_body
 from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, time_constant_from_pole
 from magdesign.mechanics.dome import BASES as DOME_BASES
+from magdesign.mechanics.dome import DEFAULT_MESH
 from magdesign.mechanics.dome import FIDELITIES as DOME_FIDELITIES
 from magdesign.mechanics.layer import FIDELITIES as LAYER_FIDELITIES
 from magdesign.mechanics.viscoelastic import DOME_HALL_POLE, DOME_HALL_SAMPLE_RATE
@@ -132,6 +133,21 @@ def _soft_solid(key, part) -> Solid:
     return solid(key, part.shape, np.asarray(part.centre, float), half, np.asarray(rotation(part.angles)).T)
 
 
+def _mesh(table):
+    """The dome's mesh [elements through the wall, along the meridian] as a tuple."""
+    value = table._get("mesh", list(DEFAULT_MESH), "integers")
+    if not (
+        isinstance(value, list)
+        and len(value) == 2
+        and all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in value)
+    ):
+        raise SpecError(
+            f"mechanics.mesh: expected [elements through the wall, along the meridian] (two positive "
+            f"integers, e.g. [3, 24]), got {echo(value)}"
+        )
+    return tuple(value)
+
+
 def _mechanics(spec, fidelity, models=("dome", "layer")):
     table = Table(spec, "mechanics")
     model = table.choice("model", models)
@@ -145,6 +161,7 @@ def _mechanics(spec, fidelity, models=("dome", "layer")):
             material=_material(table),
             fidelity=table.choice("fidelity", levels, default="reissner"),
             base=table.choice("base", DOME_BASES, default="bonded"),
+            mesh=_mesh(table),
         )
     else:
         levels = LAYER_FIDELITIES
