@@ -48,7 +48,8 @@ Several bodies (:func:`coupled_magnetization`) magnetise one another: one system
 their cells, the blocks between two bodies evaluated pair by pair in the bodies' own frames.
 
 Not modelled: hysteresis and remanence of the soft parts; the cells' own shape inside
-curved bodies (staircase).
+curved bodies (staircase). A linear body's mean magnetisation to ~0.1 %, with an error
+estimate, comes from the surface formulation of :mod:`magdesign.fields.soft_surface`.
 """
 
 import warnings
