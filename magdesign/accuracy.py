@@ -29,7 +29,10 @@ The cases:
   Reissner and the axisymmetric model at four meshes against the finest mesh.
 - soft sphere: the method of moments for a Ni-Fe sphere (mu_r 1000, diameter 2 mm) in a
   uniform field, 4..16 cells across, against the exact M = 3 chi / (3 + chi) H0; error is
-  the mean M's relative error; one evaluation is one solve.
+  the mean M's relative error; one evaluation is one solve. The surface formulation
+  (:mod:`magdesign.fields.soft_surface`) of the same sphere at ladder levels 1..3, with its
+  own error estimate beside the error (the panels' matrices are built once, on the first
+  call, and reused; the time is a warm solve).
 - suspension pole: the spring coefficient of the magnetic-suspension sensor's rod
   (``SUSPENSION_POLE``, the scene of examples/pole_plate.toml) at 8..16 cells
   along it (the example's 16 included) against 24 cells (itself not converged: the magnetic-suspension
@@ -52,11 +55,12 @@ from matplotlib.figure import Figure
 from magdesign._files import replaced
 from magdesign._progress import say, stage
 from magdesign.design import solve
-from magdesign.fields import cylinder, film, soft
+from magdesign.fields import cylinder, film, soft, soft_surface
 from magdesign.mechanics import LinearElastic, MooneyRivlin, dome_compliance, layer_stiffness
 from magdesign.scene import scene_from_spec
 from magdesign.scene.effects import AreaAveraging
 from magdesign.spec.design import default_spec, problem_from_spec
+from magdesign.spec.levels import LADDERS, grid_factor
 from magdesign.units import MU0, mm, um
 
 # The levels measured; the QUICK_ ones are --quick's tier.
@@ -67,6 +71,7 @@ AREA_POINTS_PER_SIDE = (1, 2, 4, 8)
 AREA_REFERENCE_POINTS = 16
 SOFT_SPHERE_CELLS, QUICK_SOFT_SPHERE_CELLS = (4, 8, 12, 16), (4,)
 SATURATED_SPHERE_CELLS, QUICK_SATURATED_SPHERE_CELLS = (4, 8, 12), (4,)
+SURFACE_LEVELS, QUICK_SURFACE_LEVELS = (1, 2, 3), (1,)
 POLE_CELLS = (24, 8, 12, 16)  # the first is the reference
 
 DOME_HALL_MAGNET = dict(radius=1.5 * mm, height=1 * mm, polarization=1.17)
@@ -89,7 +94,10 @@ class Row(NamedTuple):
     """One measured level: error against the model's most exact level, and its cost.
 
     error is relative (unit "relative") except for decision rows (unit "m"); seconds is
-    the warm time of one evaluation (s); cases says what one evaluation is.
+    the warm time of one evaluation (s); cases says what one evaluation is. estimate is the
+    level's own estimate of its error (same unit as error), what the model reports beside
+    its answers, or None for a level that makes none: the table sets it beside the true
+    error to show whether it is honest (it should bound the error).
     """
 
     model: str
@@ -98,6 +106,7 @@ class Row(NamedTuple):
     seconds: float
     unit: str
     cases: str
+    estimate: float | None = None
 
 
 def _warm_seconds(fn, *args, per=1, quick=False):
@@ -119,6 +128,20 @@ def _field_points():
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
     distances = DOME_HALL_MAGNET["radius"] * np.geomspace(1.5, 20.0, 2000)
     return directions * distances[:, None]
+
+
+def _ladder_estimates(values, difference, ranks=None, model=None):
+    """Each level's error estimate as the reports make it (:mod:`magdesign.spec.levels`):
+    ``difference(a, b)`` of its value and the next finer level's (the finest level: the one
+    below), times the grid factor of ``model``'s ladder between the levels' resolutions
+    ``ranks`` (1 without a model). ``values`` run from the coarsest level to the finest."""
+    order = None if model is None else next(ladder.order for ladder in LADDERS if ladder.model == model)
+    estimates = []
+    for i, value in enumerate(values):
+        j = i + 1 if i + 1 < len(values) else i - 1
+        factor = 1.0 if order is None else grid_factor(ranks[i], ranks[j], order)
+        estimates.append(factor * difference(value, values[j]))
+    return estimates
 
 
 def _relative_error(approx, exact):
@@ -185,13 +208,25 @@ def measure_area_averaging(quick=False):
 
     reference = averaged(AREA_REFERENCE_POINTS)(batch)
     scale = float(jnp.max(jnp.linalg.norm(reference, axis=-1)))
-    rows = []
-    for per_side in AREA_POINTS_PER_SIDE:
-        fn = averaged(per_side)
-        error = float(jnp.max(jnp.linalg.norm(fn(batch) - reference, axis=-1))) / scale
-        seconds = _warm_seconds(fn, batch, per=batch.shape[0], quick=quick)
-        rows.append(Row("sensor area averaging", f"n={per_side**2}", error, seconds, "relative", "one chip"))
-    return rows
+
+    def difference(a, b):
+        return float(jnp.max(jnp.linalg.norm(a - b, axis=-1))) / scale
+
+    functions = [averaged(per_side) for per_side in AREA_POINTS_PER_SIDE]
+    values = [fn(batch) for fn in functions]
+    estimates = _ladder_estimates(values, difference)
+    return [
+        Row(
+            "sensor area averaging",
+            f"n={per_side**2}",
+            difference(value, reference),
+            _warm_seconds(fn, batch, per=batch.shape[0], quick=quick),
+            "relative",
+            "one chip",
+            estimate,
+        )
+        for per_side, fn, value, estimate in zip(AREA_POINTS_PER_SIDE, functions, values, estimates)
+    ]
 
 
 def measure_layer(quick=False):
@@ -256,18 +291,44 @@ def measure_soft(quick=False):
     field = jnp.array([0.0, 0.0, 1e-3])
     exact = 3.0 * 999.0 / 1002.0 * float(field[2]) / MU0
     solve_soft = jax.jit(soft.magnetization)
-    for cells in QUICK_SOFT_SPHERE_CELLS if quick else SOFT_SPHERE_CELLS:
+    ladder = QUICK_SOFT_SPHERE_CELLS if quick else SOFT_SPHERE_CELLS
+    means, seconds = [], []
+    for cells in ladder:
         body = soft.soft_body("sphere", radius=1 * mm, cells=cells, permeability=1000.0)
         external = jnp.broadcast_to(field, (len(body.index), 3))
-        error = abs(float(jnp.mean(solve_soft(body, external)[:, 2])) / exact - 1)
+        means.append(float(jnp.mean(solve_soft(body, external)[:, 2])))
+        seconds.append(_warm_seconds(solve_soft, body, external, quick=quick))
+    # one level has no companion: the quick tier's single row carries no estimate
+    estimates = _ladder_estimates(means, lambda a, b: abs(a / b - 1), ladder, "soft") if len(ladder) > 1 else [None]
+    for cells, mean, cost, estimate in zip(ladder, means, seconds, estimates):
         rows.append(
             Row(
                 "soft sphere (moments)",
                 f"{cells} cells across",
-                error,
-                _warm_seconds(solve_soft, body, external, quick=quick),
+                abs(mean / exact - 1),
+                cost,
                 "relative",
                 "one solve",
+                estimate,
+            )
+        )
+    for level in QUICK_SURFACE_LEVELS if quick else SURFACE_LEVELS:
+
+        def surface(level=level):
+            return soft_surface.mean_magnetization(
+                "sphere", permeability=1000.0, external=field, radius=1 * mm, level=level
+            )
+
+        answer = surface()
+        rows.append(
+            Row(
+                "soft sphere (surface)",
+                f"level {level}, {answer.panels} panels",
+                abs(float(answer.magnetization[2]) / exact - 1),
+                _warm_seconds(lambda: surface().magnetization, quick=quick),
+                "relative",
+                "one solve",
+                float(answer.error),
             )
         )
     applied, saturated = 1.0, _saturated_sphere(299.0, 2.2, 1.0)  # Fe in 1 T
@@ -303,6 +364,10 @@ def measure_pole():
         scene = scene_from_spec({**SUSPENSION_POLE, "pole": pole | level})
         values[name], seconds[name] = float(outputs(scene)), _warm_seconds(outputs, scene)
     reference = values[levels[0][0]]
+    # the moments levels from the fewest cells to the most, each with its estimate
+    ranks, names = zip(*sorted((level["cells"], name) for name, level in levels if level["fidelity"] == "moments"))
+    relative = _ladder_estimates([values[name] for name in names], lambda a, b: abs(a / b - 1), ranks, "pole")
+    estimates = dict(zip(names, relative))
     for name, _ in levels:
         rows.append(
             Row(
@@ -312,6 +377,7 @@ def measure_pole():
                 seconds[name],
                 "relative",
                 "one spring coefficient",
+                estimates.get(name),
             )
         )
     return rows
@@ -394,14 +460,27 @@ def measure(progress=None, quick=False) -> list[Row]:
 def table(rows) -> str:
     """The rows as a readable table: error (relative, or um for decisions) beside time."""
     width = max([24] + [len(row.model) + 2 for row in rows])
-    lines = [f"{'model':<{width}}{'fidelity':<22}{'error':>14}{'time':>14}  per", "-" * (width + 62)]
+    head = f"{'model':<{width}}{'fidelity':<22}{'error':>14}{'estimate':>14}{'bounds':>8}{'time':>14}  per"
+    lines = [head, "-" * (len(head) + 18)]
     for row in rows:
-        lines.append(f"{row.model:<{width}}{row.fidelity:<22}{_error(row):>14}{_seconds(row.seconds):>14}  {row.cases}")
+        estimate = "-" if row.estimate is None else _error(row, row.estimate)
+        lines.append(
+            f"{row.model:<{width}}{row.fidelity:<22}{_error(row):>14}{estimate:>14}{_bounds(row):>8}"
+            f"{_seconds(row.seconds):>14}  {row.cases}"
+        )
     return "\n".join(lines)
 
 
-def _error(row):
-    return f"{row.error / um:.3g} um" if row.unit == "m" else f"{row.error:.2e}"
+def _error(row, value=None):
+    value = row.error if value is None else value
+    return f"{value / um:.3g} um" if row.unit == "m" else f"{value:.2e}"
+
+
+def _bounds(row):
+    """Whether the level's estimate bounds its true error: "yes", "NO", or "-" (no estimate)."""
+    if row.estimate is None:
+        return "-"
+    return "yes" if row.estimate >= row.error else "NO"
 
 
 def _seconds(value):
