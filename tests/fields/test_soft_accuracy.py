@@ -147,9 +147,9 @@ def test_the_answer_is_differentiable_in_the_permeability():
 
 
 def test_reference_ring_field_is_minus_the_gradient_of_its_potential():
-    """A unit ring charge's potential K(m) / (2 pi^2 sqrt((rho + a)^2 + dz^2)) (Smythe, "Static
-    and Dynamic Electricity", 1950, section 5.13's ring, in H = q r / (4 pi r^3) units),
-    differentiated by central differences."""
+    """A unit ring charge's potential K(m) / (2 pi^2 sqrt((rho + a)^2 + dz^2)) (the integral of
+    1 / (4 pi |x - y|) around the ring, m = 4 rho a / ((rho + a)^2 + dz^2)), differentiated by
+    central differences."""
 
     def potential(rho, z, radius, height):
         plus = (rho + radius) ** 2 + (z - height) ** 2
@@ -197,7 +197,8 @@ def test_reference_cylinder_factors_converge():
 @pytest.mark.parametrize("ratio", [0.5, 1.0, 2.0, 5.0])
 def test_cylinder_demagnetizing_factor_against_the_independent_reference(ratio, cylinder_references):
     """soft_surface.demagnetizing_factor at level 2 within 0.5 % of the reference (mu_r 10 and
-    1000, along the axis), its error estimate above the difference. Measured: see the commit."""
+    1000, along the axis), its error estimate above the difference. Measured: +0.05 % (length/
+    diameter 5) to +0.27 % (1), the estimate 4 to 24 times the difference."""
     for permeability, expected in zip((10.0, 1000.0), cylinder_references[ratio]):
         factor, error = soft_surface.demagnetizing_factor(
             "cylinder", permeability=permeability, radius=RADIUS, height=2.0 * RADIUS * ratio, level=2
