@@ -80,6 +80,16 @@ def test_unreachable_rtol_is_a_status_never_a_silent_number():
         _compliance("dome-Hall", rtol=1e-5)
 
 
+def test_curve_error_bounds_the_force_error_at_each_travel():
+    Ro, t, _, reference_mesh = DOMES["dome-Hall"]
+    travels = np.array([0.2, 0.8, 1.6]) * 1e-3
+    kwargs = dict(outer_radius=Ro, thickness=t, material=RESIN, travels=travels)
+    curve = dome_curve(**kwargs)
+    fine = dome_curve(**kwargs, mesh=reference_mesh)
+    assert curve.mesh == LADDER[0] and np.all(np.isinf(fine.error))  # off the ladder: unknown
+    assert np.all(np.abs(curve.force - fine.force) <= curve.error)
+
+
 def test_reissner_error_is_unknown_not_zero():
     Ro, t, force, _ = DOMES["dome-Hall"]
     kwargs = dict(outer_radius=Ro, thickness=t, material=RESIN, fidelity="reissner")
