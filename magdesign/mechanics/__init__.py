@@ -1,5 +1,6 @@
 """Mechanics: materials, elastomer layers (stiffness, displacement field) and domes (SI: m, N, Pa)."""
 
+from magdesign.mechanics.dome import ComplianceEstimate as ComplianceEstimate
 from magdesign.mechanics.dome import DomeCurve as DomeCurve
 from magdesign.mechanics.dome import DomeResult as DomeResult
 from magdesign.mechanics.dome import dome_compliance as dome_compliance

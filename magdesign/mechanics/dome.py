@@ -40,7 +40,7 @@ from jax import lax
 from jaxtyping import Array, ArrayLike, Float
 
 from magdesign._validation import _concrete, check_nonnegative, check_positive
-from magdesign.mechanics import _axisymmetric
+from magdesign.mechanics import _axisymmetric, _ladder
 from magdesign.mechanics.materials import AbstractHyperelastic, AbstractMaterial
 
 # Smallest plate travel of the axisymmetric dome, as a fraction of the wall thickness:
@@ -54,8 +54,9 @@ DOME_MIN_TRAVEL_FRACTION = 1e-3
 
 FIDELITIES = ("reissner", "axisymmetric")
 BASES = ("bonded", "sliding")
-# (elements through the wall, elements along the meridian) of the axisymmetric level
-DEFAULT_MESH = (2, 16)
+# (elements through the wall, elements along the meridian) of the axisymmetric level: the
+# lowest level of the mesh ladder (magdesign.mechanics._ladder.LADDER)
+DEFAULT_MESH = _ladder.LADDER[0]
 # The first travel step of a followed path, as a fraction of Reissner's estimate of the
 # travel at the largest wanted force (the path doubles it while Newton converges easily).
 FIRST_STEP_FRACTION = 0.5
@@ -79,6 +80,10 @@ class DomeResult(eqx.Enumeration):
         "to the equilibrium beyond did not converge"
     )
     max_steps_reached = "the dome's force-travel path needed more steps than PATH_MAX_STEPS"
+    tolerance_not_met = (
+        "the dome's estimated mesh error stayed above rtol |value| up to the finest level of the "
+        "mesh ladder (LADDER): the value and its estimate are that level's"
+    )
 
 
 class DomeCurve(eqx.Module):
@@ -89,16 +94,50 @@ class DomeCurve(eqx.Module):
         force: plate force (N), the reaction of the dome; differentiable.
         contact_radius: radius (m) out to which the wall touches the plate (0 for
             "reissner", a point load); not differentiable.
+        error: estimated absolute error (N) of each force from the mesh, >= 0, not
+            differentiated (see :func:`dome_curve`); +inf where nothing is known: for
+            "reissner" (its error is the model's, not a mesh's, see the module docstring), a
+            mesh off the ladder, or a point whose companion level did not succeed.
         result: :class:`DomeResult` of each point.
+        mesh: the axisymmetric mesh used (elements through the wall, along the meridian);
+            None for "reissner".
     """
 
     travel: Float[Array, " n"]
     force: Float[Array, " n"]
     contact_radius: Float[Array, " n"]
+    error: Float[Array, " n"]
     result: DomeResult
+    mesh: tuple[int, int] | None = eqx.field(static=True)
 
 
-def _check(outer_radius, thickness, material, fidelity, base, mesh):
+class ComplianceEstimate(eqx.Module):
+    """A dome compliance with its estimated mesh error (:func:`dome_compliance` with
+    ``estimate=True``); arrays of the shape of ``max_force``.
+
+    Attributes:
+        value: secant compliance (m/N); differentiable.
+        error: estimated absolute error of ``value`` (m/N), >= 0, not differentiated
+            (stop_gradient); +inf where nothing is known (as :attr:`DomeCurve.error`).
+        result: :class:`DomeResult` of each compliance.
+        mesh: the axisymmetric mesh used; None for "reissner".
+    """
+
+    value: Float[Array, "*k"]
+    error: Float[Array, "*k"]
+    result: DomeResult
+    mesh: tuple[int, int] | None = eqx.field(static=True)
+
+
+def _check(outer_radius, thickness, material, fidelity, base, mesh, rtol):
+    if mesh is not None and rtol is not None:
+        raise ValueError("give at most one of mesh and rtol: rtol chooses the mesh from the ladder")
+    if rtol is not None:
+        if not (np.ndim(rtol) == 0 and _concrete(rtol) is not None and 0 < float(rtol) < 1):
+            raise ValueError(f"rtol must be a number between 0 and 1, got {rtol!r}")
+        if fidelity != "axisymmetric":
+            raise ValueError("rtol chooses an axisymmetric mesh: use it with fidelity='axisymmetric'")
+    mesh = DEFAULT_MESH if mesh is None else mesh
     if fidelity not in FIDELITIES:
         raise ValueError(f"fidelity must be one of {FIDELITIES}, got {fidelity!r}")
     if base not in BASES:
@@ -217,6 +256,51 @@ def _raise_unless_successful(value, result, throw):
     return result.error_if(value, result != DomeResult.successful)
 
 
+def _climb(evaluate, rtol):
+    """``evaluate(k)`` -> (value, error, result, ...) at ladder level k, from level 1 up: the
+    first whose every element succeeded with error <= rtol |value|, else the finest, with
+    tolerance_not_met where a solved element missed rtol. Returns (level, that tuple)."""
+    for level in range(1, len(_ladder.LADDER)):
+        value, error, result, *rest = evaluate(level)
+        if _concrete(value) is None:
+            raise ValueError(
+                "rtol compares concrete values between mesh levels: call outside jax.jit and "
+                "jax.grad, or pass the mesh it chose (mesh=ComplianceEstimate.mesh)"
+            )
+        solved = np.asarray(result == DomeResult.successful)
+        met = np.asarray(_ladder.met(value, error, rtol))
+        if np.all(solved & met):
+            return level, (value, error, result, *rest)
+    result = DomeResult.where(solved & ~met, DomeResult.tolerance_not_met, result)
+    return level, (value, error, result, *rest)
+
+
+def _compliance_estimate(params, max_force, base, mesh, rtol):
+    """(level's mesh, compliance (m/N), its estimated error (m/N), result) at ``mesh`` or,
+    with ``rtol``, at the level of the ladder that meets it."""
+    solves = {}
+
+    def solve(mesh):  # each level solved once per call
+        if mesh not in solves:
+            travels, result, forces = _travels(*params, max_force, base, mesh)
+            solves[mesh] = (travels / forces, result)
+        return solves[mesh]
+
+    def evaluate(level):
+        value, result = solve(_ladder.LADDER[level])
+        other, other_result = solve(_ladder.LADDER[_ladder.companion(level)])
+        return value, _ladder.estimate(value, other, level, other_result == DomeResult.successful), result
+
+    if rtol is not None:
+        level, (value, error, result) = _climb(evaluate, rtol)
+        return _ladder.LADDER[level], value, error, result
+    level = _ladder.level_of(mesh)
+    if level is None:
+        value, result = solve(mesh)
+        return mesh, value, jnp.full_like(value, jnp.inf), result
+    return (mesh, *evaluate(level))
+
+
 def dome_compliance(
     *,
     outer_radius: Float[ArrayLike, ""],
@@ -225,9 +309,11 @@ def dome_compliance(
     max_force: Float[ArrayLike, "*k"],
     fidelity: str = "axisymmetric",
     base: str = "bonded",
-    mesh: tuple[int, int] = DEFAULT_MESH,
+    mesh: tuple[int, int] | None = None,
+    rtol: float | None = None,
+    estimate: bool = False,
     throw: bool = True,
-) -> Float[Array, "*k"] | tuple[Float[Array, "*k"], DomeResult]:
+) -> Float[Array, "*k"] | tuple[Float[Array, "*k"], DomeResult] | ComplianceEstimate:
     """Secant compliance (m/N) of a hemispherical dome: the plate travel at the first
     crossing of ``max_force`` on the force-travel path, divided by ``max_force``.
 
@@ -241,20 +327,85 @@ def dome_compliance(
             for the dome-Hall sensor's dome) is evaluated at that floor (see DOME_MIN_TRAVEL_FRACTION).
         fidelity: "reissner" (closed form, linear) or "axisymmetric" (nonlinear FE).
         base: "bonded" (rim clamped, as in the dome-Hall sensor) or "sliding" (rim free to slide radially).
-        mesh: (elements through the wall, elements along the meridian), axisymmetric only.
+        mesh: (elements through the wall, elements along the meridian), axisymmetric only;
+            None: DEFAULT_MESH, or the level ``rtol`` chooses.
+        rtol: relative tolerance on the estimated mesh error (axisymmetric only, not with
+            ``mesh``, not under jax.jit or jax.grad): the mesh ladder is climbed until the
+            estimate is <= rtol |compliance| at every force; where no level meets it the
+            result is ``DomeResult.tolerance_not_met``.
+        estimate: if True, a :class:`ComplianceEstimate` (value, error, result, mesh) is
+            returned (with ``throw=True`` it raises as the plain value would).
         throw: if True, a solve that did not succeed raises an error naming what failed
             (:class:`DomeResult`); if False, ``(compliance, result)`` is returned instead.
+
+    The error estimate compares two consecutive levels of a fixed mesh ladder
+    (``magdesign.mechanics._ladder.LADDER``, each level refining wall and meridian
+    together; DEFAULT_MESH is its lowest level): ESTIMATE_FACTOR (4) times their
+    difference, and not below ESTIMATE_FLOOR (0.3 %) of the value; the lowest level is
+    compared with the one above (factor 1 + ESTIMATE_FACTOR). It assumes that the
+    remaining error is at most that factor times the last refinement's change: the
+    largest ratio measured, with a margin, on bonded domes of t / R_o 0.05, 0.125 and 0.25
+    from a travel of t / 10 to past a buckle, against meshes at least twice as fine each way.
+    It costs a second mesh's solve. Past a buckle the compliance depends on which branch
+    the path follows and the levels differ by percents (the 8 / 1 mm dome at 5 N: 6 % at
+    DEFAULT_MESH): the estimate says so. A mesh off the ladder, or Reissner, has no
+    estimate (+inf). The error is not differentiated; the value is (jax.jit and jax.grad
+    work without rtol).
 
     Raises ValueError naming the argument for a bad configuration or value. A plain
     Python call reuses the program compiled for the same fidelity, base, mesh and shape.
     """
-    _check(outer_radius, thickness, material, fidelity, base, mesh)
+    _check(outer_radius, thickness, material, fidelity, base, mesh, rtol)
     check_nonnegative(max_force=max_force, unit="N")
+    mesh = DEFAULT_MESH if mesh is None else tuple(mesh)
     if fidelity == "reissner":
-        compliance = jnp.broadcast_to(_reissner_compliance(outer_radius, thickness, material), jnp.shape(max_force))
-        return compliance if throw else (compliance, _successful(jnp.shape(max_force)))
-    travels, result, forces = _travels(outer_radius, thickness, material, max_force, base, mesh)
-    return _raise_unless_successful(travels / forces, result, throw)
+        shape = jnp.shape(max_force)
+        compliance = jnp.broadcast_to(_reissner_compliance(outer_radius, thickness, material), shape)
+        out = ComplianceEstimate(compliance, jnp.full(shape, jnp.inf), _successful(shape), None)
+    elif rtol is None and not estimate:
+        travels, result, forces = _travels(outer_radius, thickness, material, max_force, base, mesh)
+        return _raise_unless_successful(travels / forces, result, throw)
+    else:
+        params = (outer_radius, thickness, material)
+        used, value, error, result = _compliance_estimate(params, max_force, base, mesh, rtol)
+        out = ComplianceEstimate(value, error, result, used)
+    if estimate:
+        return out.result.error_if(out, out.result != DomeResult.successful) if throw else out
+    return _raise_unless_successful(out.value, out.result, throw)
+
+
+def _curve_at(params, travels, max_force, fractions, base, mesh):
+    """(travels (n,), forces (n,), radii (n,), results (n,)) at one mesh: at ``travels`` or,
+    where it is None, at ``fractions`` of the travel where ``max_force`` is first crossed."""
+    crossing = None
+    if travels is None:
+        end, crossing, _ = _travels(*params, max_force, base, mesh)
+        travels = end * fractions
+    forces, radii, result = _axisymmetric_curve(*_as_arrays(params), travels, base, mesh)
+    if crossing is not None:  # the path's own result where the wanted force was not carried
+        result = DomeResult.where(crossing == DomeResult.successful, result, crossing)
+    return travels, forces, radii, result
+
+
+def _curve_estimate(params, travels, max_force, fractions, base, mesh, rtol):
+    """:class:`DomeCurve` at ``mesh`` or, with ``rtol``, at the level of the ladder that meets it."""
+
+    def evaluate(level):
+        at, forces, radii, result = _curve_at(params, travels, max_force, fractions, base, _ladder.LADDER[level])
+        companion = _ladder.LADDER[_ladder.companion(level)]
+        _, other, _, other_result = _curve_at(params, at, None, None, base, companion)
+        error = _ladder.estimate(forces, other, level, other_result == DomeResult.successful)
+        return forces, error, result, at, radii
+
+    if rtol is not None:
+        level, (forces, error, result, at, radii) = _climb(evaluate, rtol)
+        return DomeCurve(at, forces, radii, error, result, _ladder.LADDER[level])
+    level = _ladder.level_of(mesh)
+    if level is None:
+        at, forces, radii, result = _curve_at(params, travels, max_force, fractions, base, mesh)
+        return DomeCurve(at, forces, radii, jnp.full_like(forces, jnp.inf), result, mesh)
+    forces, error, result, at, radii = evaluate(level)
+    return DomeCurve(at, forces, radii, error, result, mesh)
 
 
 def dome_curve(
@@ -266,7 +417,8 @@ def dome_curve(
     max_force: Float[ArrayLike, ""] | None = None,
     fidelity: str = "axisymmetric",
     base: str = "bonded",
-    mesh: tuple[int, int] = DEFAULT_MESH,
+    mesh: tuple[int, int] | None = None,
+    rtol: float | None = None,
     n_points: int = 10,
     throw: bool = True,
 ) -> DomeCurve:
@@ -276,27 +428,25 @@ def dome_curve(
     ``max_force`` (N, > 0): the path at ``n_points`` travels evenly spaced up to the first
     crossing of that force (whose travel :func:`dome_compliance` divides by it).
 
-    Other arguments as :func:`dome_compliance`. With ``throw=True`` a point that did not
-    succeed raises an error naming what failed; with ``throw=False`` each point carries
-    its :class:`DomeResult`. A thin dome's path is followed through its softening: the
-    force may fall as the travel grows.
+    Other arguments as :func:`dome_compliance`. ``DomeCurve.error`` is the estimated mesh
+    error of each force, from the companion level of the mesh ladder solved at the same
+    travels (see :func:`dome_compliance` for the estimate and what it assumes); with
+    ``rtol`` the ladder is climbed until every point's estimate is <= rtol |force|. With
+    ``throw=True`` a point that did not succeed raises an error naming what failed; with
+    ``throw=False`` each point carries its :class:`DomeResult`. A thin dome's path is
+    followed through its softening: the force may fall as the travel grows.
     """
-    _check(outer_radius, thickness, material, fidelity, base, mesh)
+    _check(outer_radius, thickness, material, fidelity, base, mesh, rtol)
     if (travels is None) == (max_force is None):
         raise ValueError("give exactly one of travels (m) and max_force (N)")
-    reissner = _reissner_compliance(outer_radius, thickness, material)
+    mesh = DEFAULT_MESH if mesh is None else tuple(mesh)
+    fractions = None
     if travels is None:
         check_positive(max_force=max_force, unit="N")
         if int(n_points) != n_points or n_points < 1:
             raise ValueError(f"n_points must be a positive integer, got {n_points!r}")
         fractions = np.arange(1, n_points + 1) / n_points
-        if fidelity == "reissner":
-            travels = jnp.asarray(reissner * max_force * fractions, dtype=float)
-        else:
-            end, crossing, _ = _travels(outer_radius, thickness, material, max_force, base, mesh)
-            travels = end * fractions
     else:
-        crossing = None
         travels = jnp.asarray(travels, dtype=float)
         concrete = _concrete(travels)
         if travels.ndim != 1 or (concrete is not None and not (np.all(concrete > 0) and np.all(np.diff(concrete) > 0))):
@@ -308,13 +458,15 @@ def dome_curve(
                 f"pressed flat), got {float(concrete[-1])!r} m"
             )
     if fidelity == "reissner":
-        return DomeCurve(travels, travels / reissner, jnp.zeros_like(travels), _successful(travels.shape))
-    forces, radii, result = _axisymmetric_curve(
-        *_as_arrays((outer_radius, thickness, material)), travels, base, tuple(mesh)
-    )
-    if crossing is not None:  # the path's own result where the wanted force was not carried
-        result = DomeResult.where(crossing == DomeResult.successful, result, crossing)
-    curve = DomeCurve(travels, forces, radii, result)
+        reissner = _reissner_compliance(outer_radius, thickness, material)
+        if travels is None:
+            travels = jnp.asarray(reissner * max_force * fractions, dtype=float)
+        unknown = jnp.full_like(travels, jnp.inf)
+        return DomeCurve(
+            travels, travels / reissner, jnp.zeros_like(travels), unknown, _successful(travels.shape), None
+        )
+    params = (outer_radius, thickness, material)
+    curve = _curve_estimate(params, travels, max_force, fractions, base, mesh, rtol)
     if throw:
-        curve = result.error_if(curve, result != DomeResult.successful)
+        curve = curve.result.error_if(curve, curve.result != DomeResult.successful)
     return curve
