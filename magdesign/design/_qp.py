@@ -186,8 +186,9 @@ def _interior_point(Q, q, A, b, G, h, needed, tol, max_iterations):
         return w0, y0, shift(z0), shift(-z0)
 
     # Whether to go on is decided in the body and carried, so that the loop's condition
-    # only reads a flag: jaxlib 0.12.1's XLA:CPU, with AVX-512 code, runs a vmapped loop
-    # whose condition evaluates these residuals (dots) on and on after every lane is done.
+    # only reads a flag and the iteration bound holds: XLA:CPU of jaxlib 0.12.1, with
+    # AVX-512 code, miscomputes this stopping test vmapped over 4 or 8 lanes, and a loop
+    # whose condition evaluates it never ends.
     state = (*interior_start(), jnp.asarray(0))
     state, _ = jax.lax.while_loop(lambda carry: carry[1], body, (state, going(state)))
     w, y, z, _, iterations = state
