@@ -185,10 +185,12 @@ def _interior_point(Q, q, A, b, G, h, needed, tol, max_iterations):
         shift = lambda v: v + jnp.maximum(0.0, 1.0 - jnp.min(v, initial=1.0))  # noqa: E731
         return w0, y0, shift(z0), shift(-z0)
 
-    # Whether to go on is decided in the body and carried, so that the loop's condition
-    # only reads a flag and the iteration bound holds: XLA:CPU of jaxlib 0.12.1, with
-    # AVX-512 code, miscomputes this stopping test vmapped over 4 or 8 lanes, and a loop
-    # whose condition evaluates it never ends.
+    # Whether to go on is decided once, in the body, and carried. A vmapped while loop
+    # evaluates its condition twice, in the loop's condition (any lane going on) and in
+    # its body (to hold the lanes that stop), and XLA:CPU may compile the two copies with
+    # other rounding (jaxlib 0.12.1 with AVX-512 code, 4 or 8 lanes). This test sits at
+    # the rounding of stationarity rows whose terms reach the slacks' 1e6, so the copies
+    # can disagree: the condition goes on for a lane that the body holds, forever.
     state = (*interior_start(), jnp.asarray(0))
     state, _ = jax.lax.while_loop(lambda carry: carry[1], body, (state, going(state)))
     w, y, z, _, iterations = state
