@@ -159,8 +159,11 @@ def _interior_point(Q, q, A, b, G, h, needed, tol, max_iterations):
         )
         return small, k
 
-    def body(state):
-        w, y, z, s, k = state
+    def going(state):
+        return needed & ~done(state)[0] & (state[4] < max_iterations)
+
+    def body(carry):
+        w, y, z, s, k = carry[0]
         r_dual, r_eq, r_ineq = residuals(w, y, z, s)
         mu = jnp.dot(s, z) / mi
         # Predictor (affine scaling), then Mehrotra's centring and second-order correction.
@@ -169,7 +172,8 @@ def _interior_point(Q, q, A, b, G, h, needed, tol, max_iterations):
         sigma = (jnp.dot(s + alpha * ds, z + alpha * dz) / mi / mu) ** 3
         dw, dy, dz, ds = newton(w, s, z, r_dual, r_eq, r_ineq, s * z + ds * dz - sigma * mu)
         alpha = _TO_BOUNDARY * largest_step(s, z, ds, dz)
-        return w + alpha * dw, y + alpha * dy, z + alpha * dz, s + alpha * ds, k + 1
+        state = w + alpha * dw, y + alpha * dy, z + alpha * dz, s + alpha * ds, k + 1
+        return state, going(state)
 
     # Start where the dual and equality residuals vanish (the KKT system with s = -z, as
     # cvxopt does), then shift s and z into the positive orthant: a start at z = 1 takes
@@ -181,8 +185,14 @@ def _interior_point(Q, q, A, b, G, h, needed, tol, max_iterations):
         shift = lambda v: v + jnp.maximum(0.0, 1.0 - jnp.min(v, initial=1.0))  # noqa: E731
         return w0, y0, shift(z0), shift(-z0)
 
+    # Whether to go on is decided once, in the body, and carried. A vmapped while loop
+    # evaluates its condition twice, in the loop's condition (any lane going on) and in
+    # its body (to hold the lanes that stop), and XLA:CPU may compile the two copies with
+    # other rounding (jaxlib 0.12.1 with AVX-512 code, 4 or 8 lanes). This test sits at
+    # the rounding of stationarity rows whose terms reach the slacks' 1e6, so the copies
+    # can disagree: the condition goes on for a lane that the body holds, forever.
     state = (*interior_start(), jnp.asarray(0))
-    state = jax.lax.while_loop(lambda st: needed & ~done(st)[0] & (st[4] < max_iterations), body, state)
+    state, _ = jax.lax.while_loop(lambda carry: carry[1], body, (state, going(state)))
     w, y, z, _, iterations = state
     return w, y, z, done(state)[0], iterations
 

@@ -3,13 +3,15 @@ where a vmapped lane needs it, the polish's KKT and feasibility equations and th
 derivatives (against plain forward-mode differentiation of the same equations), its
 Newton step, the model's evaluations in the solver's loop, the jet the polish hands to the
 implicit derivatives and those derivatives against closed forms, the QP's active-set
-rounds on a subproblem that once sent a whole batch to the interior-point method, and the
-polish's linear solver (LU, else SVD) against numpy."""
+rounds on a subproblem that once sent a whole batch to the interior-point method, the
+polish's linear solver (LU, else SVD) against numpy, and the conditions of the loops of the
+vmapped program."""
 
 import importlib
 
 import equinox as eqx
 import jax
+import jax.extend as jex
 import jax.numpy as jnp
 import lineax as lx
 import numpy as np
@@ -492,3 +494,53 @@ def test_the_solvers_program_calls_no_python():
     host = _host(problem)
     text = _compiled(key, False).lower(arrays, _start(problem, None, host.arrays), host.arrays[4]).as_text()
     assert "callback" not in text
+
+
+# Primitives that compute their result exactly (no rounding): comparisons, logic, exact
+# reductions, moves, and calls into nested programs (whose own primitives are checked).
+_EXACT = {
+    "abs", "and", "or", "not", "eq", "ne", "lt", "le", "gt", "ge", "is_finite", "neg",
+    "argmax", "argmin", "reduce_max", "reduce_min", "reduce_or", "reduce_and", "max", "min",
+    "broadcast_in_dim", "concatenate", "convert_element_type", "select_n", "squeeze", "reshape",
+    "slice", "dynamic_slice", "transpose", "copy", "iota", "stack", "pjit", "jit", "closed_call",
+}  # fmt: skip
+
+
+def _nested(eqn):
+    """The jaxprs inside an equation's parameters (a loop's, a branch's, a call's)."""
+    for value in eqn.params.values():
+        for item in value if isinstance(value, (tuple, list)) else [value]:
+            if isinstance(item, jex.core.ClosedJaxpr):
+                yield item.jaxpr
+            elif isinstance(item, jex.core.Jaxpr):
+                yield item
+
+
+def _primitives(jaxpr):
+    return {eqn.primitive.name for eqn in jaxpr.eqns}.union(*(_primitives(j) for e in jaxpr.eqns for j in _nested(e)))
+
+
+def _loop_conditions(jaxpr):
+    for eqn in jaxpr.eqns:
+        if eqn.primitive.name == "while":
+            yield eqn.params["cond_jaxpr"].jaxpr
+        for inner in _nested(eqn):
+            yield from _loop_conditions(inner)
+
+
+def test_loop_conditions_of_the_vmapped_design_program_do_not_round():
+    """vmap evaluates a while loop's condition twice, in the loop's condition (whether any
+    lane goes on) and in its body (which lanes it holds), and XLA may compile the two copies
+    with other rounding (jaxlib 0.12.1 on AVX-512 did): a condition that rounds can then go
+    on for a lane that the body holds, forever. The conditions of the batched default
+    design's loops only compare, combine flags and take exact maxima: what rounds is
+    decided in the bodies and carried."""
+    problem, _ = problem_from_spec(default_spec(), fidelity="reissner")
+    lower, upper, scale, start, theta = problem_arrays(problem, np)
+    starts, thetas = np.stack([(start - lower) / scale] * 3), np.stack([theta] * 3)
+    settings = settings_of(1e-10, 1e-13, 100)
+    program = jax.make_jaxpr(jax.vmap(lambda y0, t: _core(problem, y0, t, settings)))(starts, thetas)
+    conditions = list(_loop_conditions(program.jaxpr))
+    assert len(conditions) >= 5  # the solver's loop, the settled step's, the QP's three, ...
+    for condition in conditions:
+        assert _primitives(condition) <= _EXACT, _primitives(condition) - _EXACT
