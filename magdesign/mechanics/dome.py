@@ -54,9 +54,10 @@ DOME_MIN_TRAVEL_FRACTION = 1e-3
 
 FIDELITIES = ("reissner", "axisymmetric")
 BASES = ("bonded", "sliding")
-# (elements through the wall, elements along the meridian) of the axisymmetric level: the
-# lowest level of the mesh ladder (magdesign.mechanics._ladder.LADDER)
-DEFAULT_MESH = _ladder.LADDER[0]
+# The axisymmetric level's meshes (elements through the wall, elements along the meridian)
+# whose values carry an error estimate, coarsest first; the default is the lowest.
+MESH_LADDER = _ladder.LADDER
+DEFAULT_MESH = MESH_LADDER[0]
 # The first travel step of a followed path, as a fraction of Reissner's estimate of the
 # travel at the largest wanted force (the path doubles it while Newton converges easily).
 FIRST_STEP_FRACTION = 0.5
@@ -387,8 +388,9 @@ def _curve_at(params, travels, max_force, fractions, base, mesh):
     return travels, forces, radii, result
 
 
-def _curve_estimate(params, travels, max_force, fractions, base, mesh, rtol):
-    """:class:`DomeCurve` at ``mesh`` or, with ``rtol``, at the level of the ladder that meets it."""
+def _curve_estimate(params, travels, max_force, fractions, base, mesh, rtol, estimate):
+    """:class:`DomeCurve` at ``mesh`` or, with ``rtol``, at the level of the ladder that meets
+    it; without ``estimate`` (and rtol) at ``mesh`` alone, its error unknown (+inf)."""
 
     def evaluate(level):
         at, forces, radii, result = _curve_at(params, travels, max_force, fractions, base, _ladder.LADDER[level])
@@ -401,7 +403,7 @@ def _curve_estimate(params, travels, max_force, fractions, base, mesh, rtol):
         level, (forces, error, result, at, radii) = _climb(evaluate, rtol)
         return DomeCurve(at, forces, radii, error, result, _ladder.LADDER[level])
     level = _ladder.level_of(mesh)
-    if level is None:
+    if level is None or not estimate:
         at, forces, radii, result = _curve_at(params, travels, max_force, fractions, base, mesh)
         return DomeCurve(at, forces, radii, jnp.full_like(forces, jnp.inf), result, mesh)
     forces, error, result, at, radii = evaluate(level)
@@ -420,6 +422,7 @@ def dome_curve(
     mesh: tuple[int, int] | None = None,
     rtol: float | None = None,
     n_points: int = 10,
+    estimate: bool = True,
     throw: bool = True,
 ) -> DomeCurve:
     """The force-travel path of the dome under plate-travel control (:class:`DomeCurve`).
@@ -431,7 +434,9 @@ def dome_curve(
     Other arguments as :func:`dome_compliance`. ``DomeCurve.error`` is the estimated mesh
     error of each force, from the companion level of the mesh ladder solved at the same
     travels (see :func:`dome_compliance` for the estimate and what it assumes); with
-    ``rtol`` the ladder is climbed until every point's estimate is <= rtol |force|. With
+    ``rtol`` the ladder is climbed until every point's estimate is <= rtol |force|.
+    ``estimate=False`` (without ``rtol``) skips the companion level's solve, half the cost
+    (and half the compile under jax.jit), and leaves ``DomeCurve.error`` +inf. With
     ``throw=True`` a point that did not succeed raises an error naming what failed; with
     ``throw=False`` each point carries its :class:`DomeResult`. A thin dome's path is
     followed through its softening: the force may fall as the travel grows.
@@ -466,7 +471,7 @@ def dome_curve(
             travels, travels / reissner, jnp.zeros_like(travels), unknown, _successful(travels.shape), None
         )
     params = (outer_radius, thickness, material)
-    curve = _curve_estimate(params, travels, max_force, fractions, base, mesh, rtol)
+    curve = _curve_estimate(params, travels, max_force, fractions, base, mesh, rtol, estimate)
     if throw:
         curve = curve.result.error_if(curve, curve.result != DomeResult.successful)
     return curve

@@ -22,15 +22,15 @@ import jax.numpy as jnp
 from magdesign._progress import stage
 from magdesign.design import solve
 from magdesign.design.report import DesignResult, format_quantity
+from magdesign.mechanics.dome import MESH_LADDER
 from magdesign.scene import MECHANICS_CONVERGED, loads_from_spec, outputs, with_parameters
 from magdesign.spec.design import problem_from_spec
 from magdesign.spec.scene import POLE_CELLS, SOFT_CELLS, scene_from_spec
 from magdesign.units import SpecError
 
-# The axisymmetric dome's meshes (elements through the wall, along the meridian), the
-# moments pole's cells along its rod and the soft parts' cells along their longest side,
-# coarsest first.
-DOME_MESHES = ((2, 16), (3, 24), (4, 32))
+# The axisymmetric dome's meshes (its own ladder), the moments pole's cells along its rod
+# and the soft parts' cells along their longest side, coarsest first.
+DOME_MESHES = MESH_LADDER
 POLE_CELL_LADDER = (8, 12, 16, 24)
 SOFT_CELL_LADDER = (8, 12, 16)
 
