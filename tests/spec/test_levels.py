@@ -34,7 +34,7 @@ def test_ladders_of_the_default_design():
     assert [ladder.model for ladder in ladders(spec)] == ["dome"]
     assert levels_of(spec) == {"dome": "reissner"}
     finer = [levels_of(at_level(spec, DOME, i))["dome"] for i in range(len(DOME.levels))]
-    assert finer == ["reissner", "axisymmetric 2x16", "axisymmetric 3x24", "axisymmetric 4x32"]
+    assert finer == ["reissner", "axisymmetric 2x16", "axisymmetric 3x24", "axisymmetric 4x32", "axisymmetric 6x48"]
     ranks = [DOME.rank(at_level(spec, DOME, i)) for i in range(len(DOME.levels))]
     assert ranks == sorted(ranks) and ranks[0] == 0
 
