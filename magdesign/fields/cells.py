@@ -24,9 +24,20 @@ from jaxtyping import Array, ArrayLike, Float
 
 from magdesign._numerics import float_array
 from magdesign._validation import check_last_axis, check_positive
-from magdesign.fields.cuboid import cuboid_tensor
-from magdesign.fields.soft import _BYTES_PER_TENSOR, KERNEL_BATCH_BYTES
+from magdesign.fields.cuboid import FAR_NODES, cuboid_tensor
 from magdesign.frames import rotate_by_vector
+
+# The cell kernel's far form holds FAR_NODES^3 point dipoles per (point, cell) pair until
+# XLA sums them: the tensors are evaluated in batches of at most this many bytes of them.
+KERNEL_BATCH_BYTES = 1 << 28
+_BYTES_PER_TENSOR = 8 * 9 * FAR_NODES**3
+
+
+def kernel_batches(fn, rows, tensors_per_row):
+    """``fn`` over ``rows`` (leading axis), in batches whose cell-kernel temporaries, for
+    ``tensors_per_row`` cuboid tensors per row, stay within KERNEL_BATCH_BYTES."""
+    size = max(1, min(rows.shape[0], KERNEL_BATCH_BYTES // (_BYTES_PER_TENSOR * tensors_per_row)))
+    return jax.lax.map(fn, rows, batch_size=size)
 
 
 def layer_cells(
@@ -85,9 +96,7 @@ def cells_field(
     def at(point):
         return jnp.einsum("nij,nj->i", cuboid_tensor(point - centres, dimension=dimension), polarization)
 
-    flat = points.reshape(-1, 3)
-    batch = max(1, min(flat.shape[0], KERNEL_BATCH_BYTES // (_BYTES_PER_TENSOR * centres.shape[0])))
-    return jax.lax.map(at, flat, batch_size=batch).reshape(points.shape)
+    return kernel_batches(at, points.reshape(-1, 3), centres.shape[0]).reshape(points.shape)
 
 
 def moved_cells(

@@ -66,7 +66,8 @@ from magdesign import _newton
 from magdesign._numerics import float_array
 from magdesign._tracing import checked
 from magdesign._validation import check_last_axis, check_positive, check_scalar
-from magdesign.fields.cuboid import FAR_NODES, cuboid_tensor
+from magdesign.fields.cells import cells_field, kernel_batches
+from magdesign.fields.cuboid import cuboid_tensor
 from magdesign.units import MU0
 
 # Saturating soft bodies: Newton's method on the cells' polarisation J (T)
@@ -88,10 +89,6 @@ SIZE_LENGTHS = {"cuboid": 3, "cylinder": 2, "sphere": 1}
 SIZE_KEYWORDS = {"cuboid": ("dimension",), "cylinder": ("radius", "height"), "sphere": ("radius",)}
 # The most cells a body may have: its dense system is (3N)^2 float64 (N = 6000: 2.6 GB).
 MAX_CELLS = 6000
-# The cell kernel's far form holds FAR_NODES^3 point dipoles per (point, cell) pair until
-# XLA sums them: the tensors are evaluated in batches of at most this many bytes of them.
-KERNEL_BATCH_BYTES = 1 << 28
-_BYTES_PER_TENSOR = 8 * 9 * FAR_NODES**3
 
 
 class SoftBody(eqx.Module):
@@ -273,15 +270,8 @@ def _table(body):
     of cells the row of its difference (N, N)."""
     flat, span = _differences(body)
     steps = jnp.asarray(np.indices(span).reshape(3, -1).T - (np.asarray(body.grid) - 1), dtype=body.cell.dtype)
-    table = _batched(lambda step: cuboid_tensor(step * body.cell, dimension=body.cell), steps, 1)
+    table = kernel_batches(lambda step: cuboid_tensor(step * body.cell, dimension=body.cell), steps, 1)
     return table, flat
-
-
-def _batched(fn, rows, tensors_per_row):
-    """``fn`` over ``rows`` (leading axis), in batches whose cell-kernel temporaries stay
-    within KERNEL_BATCH_BYTES."""
-    size = max(1, min(rows.shape[0], KERNEL_BATCH_BYTES // (_BYTES_PER_TENSOR * tensors_per_row)))
-    return jax.lax.map(fn, rows, batch_size=size)
 
 
 def interaction(body: SoftBody) -> Float[Array, "n3 n3"]:
@@ -364,7 +354,7 @@ def _cross_interaction(a, centre_a, matrix_a, b, centre_b, matrix_b):
     points = centre_a + a.centres @ matrix_a  # a's centres, scene frame
     local = (points - centre_b) @ matrix_b.T  # in b's frame
     steps = (local[:, None, :] - b.centres[None, :, :]).reshape(-1, 3)
-    tensors = _batched(lambda step: cuboid_tensor(step, dimension=b.cell), steps, 1)
+    tensors = kernel_batches(lambda step: cuboid_tensor(step, dimension=b.cell), steps, 1)
     tensors = tensors.reshape(len(a.index), len(b.index), 3, 3)
     turned = jnp.einsum("kl,ijlm->ikjm", matrix_a @ matrix_b.T, tensors)
     return turned.reshape(3 * len(a.index), 3 * len(b.index))
@@ -471,15 +461,7 @@ def field(
 ) -> Float[Array, "... 3"]:
     """The body's own flux density B (T) at ``points`` (m, body frame, shape (..., 3)),
     given its cells' magnetisation (A/m, (N, 3)). Inside a cell B = mu0 (H + M)."""
-    check_last_axis("points", points, 3)
-    points = float_array(points)
-    polarization, centres = MU0 * float_array(magnetization), body.centres
-
-    def at(point):
-        return jnp.einsum("nij,nj->i", cuboid_tensor(point - centres, dimension=body.cell), polarization)
-
-    flat = points.reshape(-1, 3)
-    return _batched(at, flat, len(body.index)).reshape(points.shape)
+    return cells_field(points, centres=body.centres, dimension=body.cell, polarization=MU0 * float_array(magnetization))
 
 
 def coenergy(body: SoftBody, external: Float[ArrayLike, "n 3"]) -> Float[Array, ""]:
