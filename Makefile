@@ -26,10 +26,10 @@ demo: $(STAMP)
 
 # the fast tier, which touches every module; test-all adds the tests marked slow
 test: $(STAMP)
-	$(PY) -m pytest -q -n 2 -m "not slow"
+	$(PY) -m pytest -q -n 2 --dist loadscope -m "not slow"
 
 test-all: $(STAMP)
-	$(PY) -m pytest -q -n 2 --durations=15
+	$(PY) -m pytest -q -n 2 --dist loadscope --durations=15
 
 # ruff: lint and format, as configured in pyproject.toml
 lint: $(STAMP)

@@ -28,8 +28,17 @@ def _drop_compiled_programs_after_each_module():
 SLOW_MODULES = ("tests/studies/", "tests/test_docs.py", "tests/test_installed.py")
 
 
+# Modules that take minutes of one worker, run first: with `-n 2 --dist loadscope` (the
+# Makefile) each module runs on one worker, so that its module fixtures (a study's run, a
+# compiled program) run once, and a long module started last would leave the other worker idle.
+LONG_MODULES = ("tests/test_cli.py", "tests/studies/", "tests/test_docs.py", "tests/test_installed.py")
+
+
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     root = Path(__file__).resolve().parent.parent
+    modules = {id(item): Path(item.fspath).resolve().relative_to(root).as_posix() for item in items}
     for item in items:
-        if Path(item.fspath).resolve().relative_to(root).as_posix().startswith(SLOW_MODULES):
+        if modules[id(item)].startswith(SLOW_MODULES):
             item.add_marker(pytest.mark.slow)
+    items.sort(key=lambda item: not modules[id(item)].startswith(LONG_MODULES))

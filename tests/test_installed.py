@@ -2,8 +2,10 @@
 dependencies into a fresh virtual environment, runs from a folder outside the source tree,
 where no import can reach the checkout's magdesign/.
 
-pip fetches the dependencies from its index (PyPI), as ``make test`` does to build .venv.
-One test, so that a parallel run builds and installs once.
+The dependencies come from the package index, installed by uv where it is beside this
+Python or on PATH (``make test`` bootstraps it into .venv; its cache then holds them all),
+else by pip, as ``make test`` does to build .venv. One test, so that a parallel run builds
+and installs once.
 """
 
 import json
@@ -28,6 +30,12 @@ def _checked(command, cwd=None, env=None):
     return result
 
 
+def _uv():
+    """uv beside this Python (``make test`` bootstraps it there) or on PATH, else None."""
+    beside = Path(sys.executable).parent / "uv"
+    return str(beside) if beside.is_file() else shutil.which("uv")
+
+
 def test_the_installed_wheel_runs_outside_the_source_tree(tmp_path):
     source = tmp_path / "source"
     source.mkdir()
@@ -44,13 +52,19 @@ def test_the_installed_wheel_runs_outside_the_source_tree(tmp_path):
     run = tmp_path / "run"  # outside the source tree
     run.mkdir()
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
-    env |= {"PATH": f"{bin_}{os.pathsep}{env.get('PATH', '')}", "MAGDESIGN_CACHE_DIR": str(tmp_path / "cache")}
+    # MAGDESIGN_CACHE_DIR stays the tests' compile cache (tests/conftest.py): the same jax
+    # compiles the same programs, so the commands load what the other tests compiled.
+    env["PATH"] = f"{bin_}{os.pathsep}{env.get('PATH', '')}"
 
     def command(*args):
         return _checked([bin_ / args[0], *args[1:]], cwd=run, env=env).stdout
 
     try:
-        command("python", *pip, "install", wheel)
+        uv = _uv()
+        if uv is None:
+            command("python", *pip, "install", wheel)
+        else:
+            _checked([uv, "pip", "install", "--quiet", "--python", bin_ / "python", wheel], cwd=run, env=env)
         where, version = command("python", "-c", "import magdesign as m; print(m.__file__, m.__version__)").split()
         assert Path(where).is_relative_to(tmp_path / "env")  # the environment's copy, not the checkout's
         assert version == tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
