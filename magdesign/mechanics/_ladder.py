@@ -41,14 +41,20 @@ def companion(level):
     return level - 1 if level > 0 else 1
 
 
+def bound(value, other, other_is_finer):
+    """Estimated absolute error of ``value`` from ``other``, the value one level finer
+    (``other_is_finer``) or one level coarser (the module docstring's rule), elementwise, in
+    the units of the value."""
+    factor = 1 + ESTIMATE_FACTOR if other_is_finer else ESTIMATE_FACTOR
+    return jnp.maximum(factor * jnp.abs(value - other), ESTIMATE_FLOOR * jnp.abs(value))
+
+
 def estimate(value, other, level, usable):
     """Estimated absolute error of ``value`` (level ``level``) from ``other`` (the value at
     ``companion(level)``), in the units of the value; +inf where ``usable`` is False (the
     companion's solve failed, so nothing is known). Not differentiated."""
     value, other = lax.stop_gradient(value), lax.stop_gradient(other)
-    factor = ESTIMATE_FACTOR if level > 0 else 1 + ESTIMATE_FACTOR
-    error = jnp.maximum(factor * jnp.abs(value - other), ESTIMATE_FLOOR * jnp.abs(value))
-    return jnp.where(usable, error, jnp.inf)
+    return jnp.where(usable, bound(value, other, companion(level) > level), jnp.inf)
 
 
 def met(value, error, rtol):

@@ -5,9 +5,11 @@ A model computed more or less exactly (the dome's mechanics, a cylinder magnet's
 the suspension pole, the ``[[soft]]`` parts) has a ladder of levels, cheapest first
 (:data:`LADDERS`). The estimate of an output at a point comes from how far it moves when one
 model at a time is raised to its next level (at its ladder's top: lowered to the level
-below, the estimate from the top two): the move itself from a cheaper model to a finer one,
-Roache's grid convergence index of it between two meshes or cell sizes
-(:func:`grid_factor`); the largest over the models, and the model that made it.
+below, the estimate from the top two): the move itself from a cheaper model to a finer one;
+between two meshes or cell sizes, the model's own rule where it has one (the dome's mesh
+ladder: :func:`magdesign.mechanics.dome.dome_compliance`'s estimate, measured on its
+meshes) and else Roache's grid convergence index of the move (:func:`grid_factor`); the
+largest over the models, and the model that made it.
 """
 
 import copy
@@ -19,9 +21,11 @@ from typing import NamedTuple
 import equinox as eqx
 import jax.numpy as jnp
 
+from magdesign._numerics import ROUNDING_SPREAD
 from magdesign._progress import stage
 from magdesign.design import solve
 from magdesign.design.report import DesignResult, format_quantity
+from magdesign.mechanics._ladder import bound as dome_mesh_error
 from magdesign.mechanics.dome import MESH_LADDER
 from magdesign.scene import MECHANICS_CONVERGED, loads_from_spec, outputs, with_parameters
 from magdesign.spec.design import problem_from_spec
@@ -80,6 +84,9 @@ class Ladder:
             the model has no estimate (a finer level exists nowhere).
         order: the order p of the discretisation's convergence in its resolution, for
             :func:`grid_factor`.
+        mesh_error: the model's own estimate between two of its discretisations, in
+            place of :func:`grid_factor`: (value, the neighbour's value, whether the
+            neighbour is finer) -> the value's absolute error; None: the grid factor.
     """
 
     model: str
@@ -89,6 +96,7 @@ class Ladder:
     label: Callable[[dict], str]
     closed_top: bool = False
     order: float = 1.0
+    mesh_error: Callable[[float, float, bool], float] | None = None
 
 
 LADDERS = (
@@ -101,7 +109,7 @@ LADDERS = (
         ),
         _dome_rank,
         _dome_label,
-        order=2.0,
+        mesh_error=dome_mesh_error,
     ),
     # A cylinder's "axis" level is the closed form on the axis, exact where a spec may use it:
     # such a field has no ladder.
@@ -200,6 +208,17 @@ def grid_factor(rank: float, other: float, order: float) -> float:
         return 1.0
     ratio = (max(rank, other) / min(rank, other)) ** order
     return GCI_SAFETY * (ratio if rank < other else 1.0) / (ratio - 1.0)
+
+
+def _error(ladder: Ladder, value: float, moved: float, rank: float, other: float) -> float:
+    """The estimated error of an output ``value`` at resolution ``rank`` that moves to
+    ``moved`` at the neighbouring level (resolution ``other``): the ladder's own
+    ``mesh_error`` between two discretisations, else the move times :func:`grid_factor`.
+    An output that moves by no more than rounding does not depend on the model: 0."""
+    move = abs(moved - value)
+    if ladder.mesh_error is None or rank == 0 or other == 0 or move <= ROUNDING_SPREAD * abs(value):
+        return grid_factor(rank, other, ladder.order) * move
+    return float(ladder.mesh_error(value, moved, other > rank))
 
 
 _evaluate = eqx.filter_jit(outputs)
@@ -301,8 +320,9 @@ def estimate(spec: dict, values: Mapping[str, float] | None = None, base: Mappin
         if broken:
             failed[ladder.model] = f"{broken[0]} is not finite at {ladder.label(other)}"
             continue
-        factor = grid_factor(ladder.rank(spec), ladder.rank(other), ladder.order)
-        by_model[ladder.model] = {name: factor * abs(moved[name] - base[name]) for name in names}
+        by_model[ladder.model] = {
+            name: _error(ladder, base[name], moved[name], ladder.rank(spec), ladder.rank(other)) for name in names
+        }
     estimates = {}
     for name in names:
         moves = {model: moved[name] for model, moved in by_model.items()}

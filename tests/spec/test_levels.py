@@ -5,7 +5,7 @@ import math
 import pytest
 
 from magdesign.spec.design import default_spec
-from magdesign.spec.levels import LADDERS, at_level, grid_factor, ladders, levels_of, parse_accuracy
+from magdesign.spec.levels import LADDERS, _error, at_level, grid_factor, ladders, levels_of, parse_accuracy
 from magdesign.spec.scene import scene_from_spec
 from magdesign.units import SpecError
 
@@ -53,6 +53,21 @@ def test_grid_factor_is_roache_gci():
     assert grid_factor(2.0, 3.0, 2.0) == pytest.approx(3 * 2.25 / 1.25)
     assert grid_factor(3.0, 2.0, 2.0) == pytest.approx(3 / 1.25)
     assert grid_factor(0, 3.0, 2.0) == 1.0
+
+
+def test_dome_meshes_take_the_domes_own_estimate():
+    """Between two meshes the dome's estimate is its own rule (mechanics/_ladder.py: 5 times
+    the move to the finer mesh, 4 times the move to the coarser, never below 0.3 % of the
+    value), not a grid factor: the design reports what dome_compliance(estimate=True) would."""
+    dome = next(ladder for ladder in LADDERS if ladder.model == "dome")
+    coarse, fine = math.sqrt(2 * 16), math.sqrt(3 * 24)
+    assert _error(dome, 1.0, 1.01, coarse, fine) == pytest.approx(0.05)
+    assert _error(dome, 1.0, 1.01, fine, coarse) == pytest.approx(0.04)
+    assert _error(dome, 1.0, 1.0001, coarse, fine) == pytest.approx(3e-3)  # the floor
+    assert _error(dome, 2.0, 2.0, coarse, fine) == 0.0  # an output the mesh does not move
+    assert _error(dome, 1.0, 1.2, 0, coarse) == pytest.approx(0.2)  # Reissner's move to the FE model
+    soft = next(ladder for ladder in LADDERS if ladder.model == "soft")
+    assert _error(soft, 1.0, 1.01, 8, 12) == pytest.approx(0.01 * grid_factor(8, 12, 1.0))
 
 
 @pytest.mark.parametrize(("text", "value"), [("1%", 0.01), ("0.01", 0.01), (" 2.5 % ", 0.025), ("1e-9", 1e-9)])
