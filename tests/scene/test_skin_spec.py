@@ -4,7 +4,9 @@ a one-line SpecError naming its key, and a design of a small skin solves from th
 import json
 import warnings
 
+import jax
 import jax.numpy as jnp
+import magpylib
 import numpy as np
 import pytest
 from scene_helpers import EXAMPLES, example
@@ -16,10 +18,12 @@ from magdesign.scene import (
     loads_from_spec,
     parameters,
     scene_from_spec,
+    simulate,
     simulation_json,
     simulation_table,
     with_parameters,
 )
+from magdesign.scene.effects import EFFECT_NAMES
 from magdesign.scene.skin_scene import SkinScene
 from magdesign.spec.checks import PlausibilityWarning
 from magdesign.units import SpecError
@@ -189,3 +193,29 @@ def test_the_simulation_table_shows_a_skins_contact_point_in_line_with_its_readi
     assert all(len(row.split()) == 4 + 2 + 6 for row in rows)
     assert rows[1].split()[4:7] == ["2", "1", "6"]  # x, y (mm), then sensor 0's Bx (mT)
     assert simulation_json(result)["units"]["displacement"] == "m, m, N, N, N"
+
+
+def test_at_rest_the_specs_chips_read_magpylibs_block():
+    """The spec's layer (sides, thickness above z = 0, a tilted polarisation) and chips (x, y,
+    depth below z = 0) against magpylib's cuboid of the same polarisation, unloaded."""
+
+    def edit(spec):
+        spec["magnet"]["direction"] = [1, 0, 1]
+
+    scene = scene_from_spec(skin(edit))
+    got = np.asarray(scene.readings_at(jnp.zeros(5)))
+    polarization = 0.02 * np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0)
+    block = magpylib.magnet.Cuboid(polarization=polarization, dimension=(0.03, 0.03, 0.002), position=(0, 0, 0.001))
+    chips = [[0.0, 0.0, -1e-3], [0.01, 0.0, -1e-3], [-0.01, 0.0, -1e-3], [0.0, 0.01, -1e-3], [0.0, -0.01, -1e-3]]
+    np.testing.assert_allclose(got, block.getB(np.array(chips)), rtol=1e-9, atol=1e-15)
+
+
+def test_every_effect_traces_through_the_skins_chain():
+    def edit(spec):
+        spec["scene"] = {"effects": list(EFFECT_NAMES)}
+
+    spec = skin(edit)
+    scene, loads = scene_from_spec(spec), loads_from_spec(spec)
+    assert [effect.name for effect in scene.effects] == list(EFFECT_NAMES)
+    result = jax.eval_shape(lambda: simulate(scene, loads, key=jax.random.key(0)))
+    assert result.readings.shape == (3, 5, 3)
