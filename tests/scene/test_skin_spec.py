@@ -219,3 +219,10 @@ def test_every_effect_traces_through_the_skins_chain():
     assert [effect.name for effect in scene.effects] == list(EFFECT_NAMES)
     result = jax.eval_shape(lambda: simulate(scene, loads, key=jax.random.key(0)))
     assert result.readings.shape == (3, 5, 3)
+
+
+@pytest.mark.slow  # compiles the layer's displacement and draws the field on a 181 x 181 grid: about a minute
+def test_the_show_command_draws_the_skin(tmp_path):
+    picture = tmp_path / "skin.png"
+    assert main(["show", str(EXAMPLES / "skin.toml"), "--plot", str(picture), "--quiet"]) == 0
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
