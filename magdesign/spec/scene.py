@@ -634,6 +634,9 @@ def _skin_chips(sensor):
 def _skin_scene(spec, fidelity):
     if fidelity is not None:
         raise SpecError(f"fidelity: the skin has one mechanics model (a bonded linear layer), got {fidelity!r}")
+    for name in ("geometry", "inductors", "pole"):
+        if name in spec:
+            raise SpecError(f"[{name}]: a skin reads no [{name}] table (its layer lies on the board at z = 0)")
     magnet = Table(spec, "magnet")
     magnet.choice("shape", ("skin",))
     polarization = magnet.quantity("polarization", "T")

@@ -110,6 +110,7 @@ def test_the_indenters_radius_is_a_design_parameter():
         (lambda s: s["indenter"].update(radius="-2 mm"), "indenter.radius", "not physical"),
         (lambda s: s["load"].update(contact_y=["0 mm", "16 mm"]), "load.contact_y", "at most 15 mm"),
         (lambda s: s.update(soft=[]), "soft", "not a skin"),
+        (lambda s: s.update(geometry={"gap": "1 mm"}), "[geometry]", "no [geometry] table"),
     ],
 )
 def test_bad_input_names_the_key_on_one_line(edit, key, expected):
