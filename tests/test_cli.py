@@ -126,7 +126,18 @@ def test_missing_spec_file_exits_2(capsys):
     assert "no/such/spec.toml" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("example", sorted(p.name for p in EXAMPLES.glob("*.toml")))
+# Examples whose simulation takes minutes: the skin's outputs compile the Jacobian of every reading
+# through the layer's transforms.
+SLOW_EXAMPLES = ("skin.toml",)
+
+
+@pytest.mark.parametrize(
+    "example",
+    [
+        pytest.param(name, marks=pytest.mark.slow) if name in SLOW_EXAMPLES else name
+        for name in sorted(p.name for p in EXAMPLES.glob("*.toml"))
+    ],
+)
 def test_every_example_simulates(example, capsys):
     assert main(["simulate", str(EXAMPLES / example), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)

@@ -310,12 +310,17 @@ def simulation_table(result: SimulationResult) -> str:
     unit, factor = _si_to_display(result.unit)
     readings = np.asarray(result.readings) * factor
     n, sensors, channels = readings.shape
-    header = ["t (s)", "Fz (N)", "Fx (N)", "Fy (N)", "ux (mm)", "uy (mm)", "uz (mm)"]
+    loads = result.loads
+    header = ["t (s)", "Fz (N)", "Fx (N)", "Fy (N)"]
+    if np.shape(result.displacement)[-1] == 3:  # the source's displacement
+        header += ["ux (mm)", "uy (mm)", "uz (mm)"]
+        u = np.asarray(result.displacement) * 1e3
+    else:  # a scene whose mechanics' state is the load itself (a skin): show the contact point
+        header += ["x (mm)", "y (mm)"]
+        u = np.asarray(loads.contact) * 1e3
     names = [f"s{s}.{label}" for s in range(sensors) for label in result.labels]
     header += [f"{name} reading ({unit})" for name in names]
     rows = []
-    loads = result.loads
-    u = np.asarray(result.displacement) * 1e3
     for i in range(n):
         row = [loads.time[i], loads.normal[i], loads.shear[i, 0], loads.shear[i, 1], *u[i], *readings[i].ravel()]
         rows.append([f"{float(value):.6g}" for value in row])
@@ -342,7 +347,8 @@ def simulation_json(result: SimulationResult) -> dict:
             "normal": "N",
             "shear": "N",
             "contact": "m",
-            "displacement": "m",
+            # a skin's mechanics' state is its load: contact (x, y) (m), then Fn, F_x, F_y (N)
+            "displacement": "m" if np.shape(result.displacement)[-1] == 3 else "m, m, N, N, N",
             "field": "T",
             "readings": result.unit,
         },

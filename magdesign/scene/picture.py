@@ -1,5 +1,6 @@
-"""A picture of a sensor: its axial plane (y = 0) with the magnet, the dome or layer, the
-chips, the field magnitude and the field lines, at rest and at the largest load.
+"""A picture of a sensor: its axial plane (y = 0) with the magnet, the dome or layer (or a
+skin and its indenter), the chips, the field magnitude and the field lines, at rest and at
+the largest load.
 
     magdesign show SPEC --plot FILE
 """
@@ -19,6 +20,7 @@ from magdesign.scene.magnet_scene import MagnetScene
 from magdesign.scene.mechanics import Dome
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import rotation
+from magdesign.scene.skin_scene import SkinScene
 
 GRID_POINTS = 181
 # A soft body's field costs one exact cuboid kernel per cell at every grid point (the
@@ -69,6 +71,9 @@ def _extent(scene):
             half = max(half, 0.6 * scene.periods * period)
         top = float(scene.layer.thickness + scene.film_thickness)
         return -half, half, -0.3 * top, 1.3 * top
+    if isinstance(scene, SkinScene):
+        half, top = 0.6 * float(scene.size[0]), float(scene.thickness + 2 * scene.sphere_radius)
+        return -half, half, -2.0 * float(scene.depth), 1.2 * top
     half = 2.2 * float(scene.ball_radius)
     top = float(scene.gap + 2 * scene.ball_radius)
     return -half, half, -1.5 * float(scene.plate_thickness), 1.1 * top
@@ -112,6 +117,16 @@ def _draw_bodies(axis, scene, displacement):
             Rectangle((-1e3, 0.0), 2e3, h * MM, facecolor="none", edgecolor="k", linestyle="--", label="layer")
         )
         chips = np.asarray(scene.sensor_poses()[0])
+    elif isinstance(scene, SkinScene):
+        # the skin undeformed (its displacements are small against h), the sphere at the contact
+        side, h = float(scene.size[0]), float(scene.thickness)
+        axis.add_patch(
+            Rectangle((-side / 2 * MM, 0.0), side * MM, h * MM, facecolor="none", edgecolor="k", label="skin")
+        )
+        if u[2] > 0.0:
+            radius = float(scene.sphere_radius)
+            axis.add_patch(Circle((u[0] * MM, (h + radius) * MM), radius * MM, **OUTLINE, label="indenter"))
+        chips = np.asarray(scene.sensor_poses()[0])
     else:
         radius, thickness = float(scene.plate_radius), float(scene.plate_thickness)
         axis.add_patch(
@@ -134,7 +149,7 @@ def _draw_bodies(axis, scene, displacement):
 
 
 def _plane_field(scene, displacement, x, z):
-    """|B| and (Bx, Bz) (T) on the (x, z) grid in y = 0; NaN above a film (no field model)."""
+    """|B| and (Bx, Bz) (T) on the (x, z) grid in y = 0; NaN above a film and inside a skin (no field model)."""
     xx, zz = np.meshgrid(x, z)
     points = jnp.asarray(np.stack([xx, 0 * xx, zz], axis=-1))
     field = np.asarray(
@@ -143,6 +158,11 @@ def _plane_field(scene, displacement, x, z):
     if isinstance(scene, FilmScene):
         below = zz < float(scene.layer.thickness + displacement[2])
         field = np.where(below[..., None], field, np.nan)
+    if isinstance(scene, SkinScene):
+        # inside the skin the moved rigid cells leave gaps and overlaps (a cell face lies in
+        # y = 0): their field there is not the continuum's, and is left out
+        inside = (zz >= 0.0) & (zz <= float(scene.thickness)) & (np.abs(xx) <= float(scene.size[0]) / 2)
+        field = np.where(inside[..., None], np.nan, field)
     return np.linalg.norm(field, axis=-1), field[..., 0], field[..., 2]
 
 
@@ -164,7 +184,7 @@ def plot_scene(scene, loads, path, *, title=""):
     soft = (isinstance(scene, PoleScene) and scene.fidelity == "moments") or bool(getattr(scene, "soft", ()))
     grid = SOFT_GRID_POINTS if soft else GRID_POINTS
     x, z = np.linspace(x_min, x_max, grid), np.linspace(z_min, z_max, grid)
-    panels = [("at rest", np.zeros(3))]
+    panels = [("at rest", np.zeros_like(displacements[index]))]  # a skin's: no force
     force = f"Fz {float(loads.normal[index]):.3g} N, Fx {float(loads.shear[index, 0]):.3g} N"
     warning = "" if converged[index] else ", mechanics did not converge"
     panels.append((f"at the largest load ({force}{warning})", displacements[index]))

@@ -112,6 +112,7 @@ class SkinScene(AbstractScene):
             "mechanics.thickness": lambda s: s.thickness,
             "mechanics.shear_modulus": lambda s: s.shear_modulus,
             "sensor.depth": lambda s: s.depth,
+            "indenter.radius": lambda s: s.sphere_radius,
         }
 
     def chip_range(self):

@@ -29,6 +29,7 @@ KINDS = {
     "quantity": 'a number with a unit ("3 mm") or a plain SI number',
     "quantities": "a list of quantities",
     "points": "a list of [x, y, z] quantities",
+    "plane points": "a list of [x, y] quantities",
     "choice": "one of the names listed",
     "names": "a list of names",
     "integer": "a whole number",
@@ -290,6 +291,7 @@ def _keys():
                 "cylinder": "an axially magnetised cylinder over point sensors",
                 "film": "a sinusoidally magnetised film over a grid of Hall chips",
                 "plate": "a magnet plate under a soft pole in a ball (magnetic suspension)",
+                "skin": "a magnetised elastomer layer over an array of 3-axis chips (a magnetic skin)",
             },
         ),
         Key("magnet.radius", q, "the cylinder's or plate's radius", "m", R, POSITIVE, LENGTH),
@@ -316,7 +318,12 @@ def _keys():
             },
         ),
         Key(
-            "magnet.direction", "quantities", "the polarisation's direction (x, y, z), normalised", "1", None, length=3
+            "magnet.direction",
+            "quantities",
+            "the polarisation's direction (x, y, z), normalised (absent: the axis; a skin's: through its thickness)",
+            "1",
+            None,
+            length=3,
         ),
         Key(
             "magnet.offset",
@@ -341,6 +348,23 @@ def _keys():
         Key("magnet.thickness", q, "the film's thickness", "m", R, POSITIVE, LENGTH),
         Key("magnet.magnetization", q, "the film's polarisation amplitude J0", "T", R, POSITIVE, FIELD, _NDFEB),
         Key("magnet.periods", "integer", "the film's width in periods (absent: an infinite film)", default=None),
+        Key(
+            "magnet.polarization",
+            q,
+            "the skin's uniform polarisation J0 (from its particle loading)",
+            "T",
+            R,
+            POSITIVE,
+            FIELD,
+            _NDFEB,
+        ),
+        Key(
+            "magnet.cells",
+            "integers",
+            "the skin's cuboid cells [along x, along y, through the thickness] for its field",
+            default=[16, 16, 8],
+            length=3,
+        ),
         # [[magnet.extra]]
         Key("magnet.extra.radius", q, "this magnet's radius", "m", R, POSITIVE, LENGTH),
         Key("magnet.extra.height", q, "this magnet's height", "m", R, POSITIVE, LENGTH),
@@ -381,10 +405,21 @@ def _keys():
                 "dome": "a hemispherical elastomer dome pressed by a flat plate",
                 "layer": "a uniform elastomer layer",
                 "tilt": "a ball on a torsion spring (the pole scene)",
+                "bonded_layer": "a linear elastic layer bonded to a rigid board, pressed by a sphere (a skin)",
             },
         ),
         Key("mechanics.outer_radius", q, "the dome's outer radius", "m", R, POSITIVE, LENGTH),
-        Key("mechanics.thickness", q, "the dome's wall or the layer's thickness", "m", R, POSITIVE, LENGTH),
+        Key("mechanics.thickness", q, "the dome's wall or the layer's (or skin's) thickness", "m", R, POSITIVE, LENGTH),
+        Key(
+            "mechanics.size",
+            "quantities",
+            "the skin's sides [along x, along y], centred on the origin",
+            "m",
+            R,
+            POSITIVE,
+            LENGTH,
+            length=2,
+        ),
         Key("mechanics.contact_area", q, "the layer's loaded area", "m^2", R, POSITIVE, AREA),
         Key(
             "mechanics.fidelity",
@@ -424,10 +459,10 @@ def _keys():
         ),
         Key("mechanics.c10", q, "Mooney-Rivlin constant C10", "Pa", R, POSITIVE, MODULUS),
         Key("mechanics.c01", q, "Mooney-Rivlin constant C01", "Pa", R, NONNEGATIVE, MODULUS),
-        Key("mechanics.shear_modulus", q, "neo-Hookean shear modulus mu", "Pa", R, POSITIVE, MODULUS),
+        Key("mechanics.shear_modulus", q, "shear modulus mu (neo-Hookean, skin)", "Pa", R, POSITIVE, MODULUS),
         Key("mechanics.bulk_modulus", q, "neo-Hookean bulk modulus K", "Pa", R, POSITIVE, MODULUS),
         Key("mechanics.youngs_modulus", q, "linear Young's modulus E", "Pa", R, POSITIVE, MODULUS),
-        Key("mechanics.poisson_ratio", q, "linear Poisson's ratio nu", "1", R, (-1.0, False, 0.5, False)),
+        Key("mechanics.poisson_ratio", q, "Poisson's ratio nu (linear, skin)", "1", R, (-1.0, False, 0.5, False)),
         Key(
             "mechanics.spring",
             q,
@@ -465,7 +500,29 @@ def _keys():
         Key(
             "sensor.pitch", q, "the grid's spacing", "m", D("required with a grid; 0 for a film's"), NONNEGATIVE, LENGTH
         ),
-        Key("sensor.depth", q, "how far the grid lies below the sensor plane", "m", 0.0, plausible=LENGTH),
+        Key(
+            "sensor.depth",
+            q,
+            "how far the grid (a skin's chips: their sensing points) lies below the sensor plane (a skin's bottom face)",
+            "m",
+            D("0 for a grid; required for a skin"),
+            plausible=LENGTH,
+        ),
+        Key(
+            "sensor.chips",
+            "plane points",
+            "a skin's chips, each one's position [x, y] (or sensor.grid and sensor.pitch)",
+            "m",
+            None,
+            plausible=LENGTH,
+        ),
+        Key(
+            "sensor.map_grid",
+            "integers",
+            "a skin's outputs: contact positions [along x, along y] over the chips' bounding box",
+            default=[5, 5],
+            length=2,
+        ),
         Key(
             "sensor.positions",
             "points",
@@ -478,6 +535,8 @@ def _keys():
         Key("sensor.amplification", q, "the voltage gain after the spin valve or bridge", "1", 1.0, POSITIVE),
         Key("sensor.offset", q, "the GMR's offset along x from the pole's axis", "m", R, plausible=LENGTH),
         Key("sensor.height", q, "the GMR's height above the magnet plate", "m", R, NONNEGATIVE, LENGTH),
+        # [indenter]: what presses a skin
+        Key("indenter.radius", q, "the radius of the rigid sphere that presses the skin", "m", R, POSITIVE, LENGTH),
         # [geometry]
         Key(
             "geometry.gap",

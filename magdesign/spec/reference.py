@@ -14,8 +14,8 @@ _INTRO = """\
 
 A spec is a TOML file of tables. The scene's tables say what the sensor is: `[magnet]`,
 `[mechanics]`, `[sensor]`, `[geometry]`, `[load]`, optionally `[scene]` (the effects of the
-measurement chain), `[inductors]`, `[pole]`, `[[magnet.extra]]` and `[[soft]]` (arrays of
-tables). A design spec adds the `[design.*]` tables: what the solver may change, what it must
+measurement chain), `[inductors]`, `[pole]`, `[indenter]` (what presses a skin),
+`[[magnet.extra]]` and `[[soft]]` (arrays of tables). A design spec adds the `[design.*]` tables: what the solver may change, what it must
 meet, and what it maximises. A key that is not listed here is an error naming the key.
 
 This page is generated from the code's own table of keys (`magdesign.spec.keys`): the readers

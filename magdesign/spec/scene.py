@@ -2,14 +2,17 @@
 
 Tables: [scene] (effects and their options), [magnet], [mechanics], [sensor],
 [geometry], [load], [inductors] (the GMR-inductor sensor), [pole] (the magnetic-suspension
-sensor). [design] is ignored. The [magnet] table's ``shape`` picks the scene type:
-"cylinder" (the dome-Hall, spin-valve matrix and GMR-inductor sensors, :class:`MagnetScene`),
-"film" (the film-Hall sensor, :class:`FilmScene`), "plate" (the magnetic-suspension sensor,
-:class:`PoleScene`); docs/references.md names the paper behind each.
+sensor), [indenter] (what presses a skin). [design] is ignored. The [magnet] table's
+``shape`` picks the scene type: "cylinder" (the dome-Hall, spin-valve matrix and
+GMR-inductor sensors, :class:`MagnetScene`), "film" (the film-Hall sensor,
+:class:`FilmScene`), "plate" (the magnetic-suspension sensor, :class:`PoleScene`), "skin"
+(a magnetised elastomer layer over a chip array, :class:`SkinScene`); docs/references.md
+names the paper behind each.
 """
 
 import dataclasses
 import math
+import warnings
 
 import equinox as eqx
 import jax
@@ -31,8 +34,9 @@ from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadou
 from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions, rotation
+from magdesign.scene.skin_scene import SkinScene
 from magdesign.scene.solids import Solid, check_apart, solid
-from magdesign.spec.checks import fields
+from magdesign.spec.checks import PlausibilityWarning, fields
 from magdesign.spec.keys import KEYS
 from magdesign.spec.sizes import check_fits
 from magdesign.spec.table import Table, check_tables
@@ -133,19 +137,24 @@ def _soft_solid(key, part) -> Solid:
     return solid(key, part.shape, np.asarray(part.centre, float), half, np.asarray(rotation(part.angles)).T)
 
 
-def _mesh(table):
-    """The dome's mesh [elements through the wall, along the meridian] as a tuple."""
-    value = table._get("mesh", list(DEFAULT_MESH), "integers")
+def _counts(table, key, default, what):
+    """The list of positive integers ``key`` of ``table`` (``default`` when absent) as a
+    tuple; SpecError naming the key and ``what`` the integers count ("[along x, along y]")."""
+    value = table._get(key, default, "integers")
     if not (
         isinstance(value, list)
-        and len(value) == 2
+        and len(value) == len(default)
         and all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in value)
     ):
         raise SpecError(
-            f"mechanics.mesh: expected [elements through the wall, along the meridian] (two positive "
-            f"integers, e.g. [3, 24]), got {echo(value)}"
+            f"{table.name}.{key}: expected {what} ({len(default)} positive integers, e.g. {default}), got {echo(value)}"
         )
     return tuple(value)
+
+
+def _mesh(table):
+    """The dome's mesh [elements through the wall, along the meridian] as a tuple."""
+    return _counts(table, "mesh", list(DEFAULT_MESH), "[elements through the wall, along the meridian]")
 
 
 def _mechanics(spec, fidelity, models=("dome", "layer")):
@@ -351,18 +360,24 @@ def _soft_parts(spec):
     return tuple(parts)
 
 
+def _direction(magnet):
+    """[magnet] direction as a unit vector (3,), or None when absent."""
+    direction = _optional_vector(magnet, "direction", "1")
+    if direction is None:
+        return None
+    norm = float(jnp.linalg.norm(direction))
+    if norm == 0.0:
+        raise SpecError("magnet.direction: expected a nonzero vector [x, y, z], got zeros")
+    return direction / norm
+
+
 def _cylinder_scene(spec, fidelity):
     magnet = Table(spec, "magnet")
     magnet.choice("shape", ("cylinder",))
     radius, height = magnet.quantity("radius", "m"), magnet.quantity("height", "m")
     remanence = magnet.quantity("remanence", "T")
     field_fidelity = magnet.choice("fidelity", CYLINDER_FIDELITIES, default="exact")
-    direction = _optional_vector(magnet, "direction", "1")
-    if direction is not None:
-        norm = float(jnp.linalg.norm(direction))
-        if norm == 0.0:
-            raise SpecError("magnet.direction: expected a nonzero vector [x, y, z], got zeros")
-        direction = direction / norm
+    direction = _direction(magnet)
     offset = _optional_vector(magnet, "offset", "m")
     magnet_angles = _optional_vector(magnet, "rotation", "rad")
     extra = _extra_magnets(magnet)
@@ -569,6 +584,119 @@ def _pole_scene(spec, fidelity):
     )
 
 
+# The Hertz contact radius over the layer's thickness up to which a skin's half-space contact
+# patch holds to about 3 % (magdesign.scene.skin_scene): beyond it a spec warns.
+SKIN_CONTACT_RATIO = 0.5
+# The Cramer-Rao bound of a contact's (x, y, Fn, F_x, F_y) needs 5 readings or more: two 3-axis chips.
+SKIN_MIN_CHIPS = 2
+
+
+def check_on_skin(keys, points, size):
+    """SpecError naming ``keys[0]`` (x) or ``keys[1]`` (y) unless every point (x, y) (m),
+    shape (n, 2), lies on a skin of sides ``size`` (m) centred on the origin."""
+    points, half = np.asarray(points, dtype=float).reshape(-1, 2), np.asarray(size, dtype=float) / 2
+    for axis, key in enumerate(keys):
+        worst = float(np.max(np.abs(points[:, axis]), initial=0.0))
+        if worst > half[axis] * (1.0 + CONTACT_RTOL):
+            raise SpecError(
+                f"{key}: a {'xy'[axis]} of {worst * 1e3:g} mm from the centre lies off the "
+                f"{size[0] * 1e3:g} x {size[1] * 1e3:g} mm skin (mechanics.size); expected at most "
+                f"{half[axis] * 1e3:g} mm"
+            )
+
+
+def check_contact_patch(scene, force):
+    """Warn (:class:`~magdesign.spec.checks.PlausibilityWarning`, naming load.normal) where the
+    skin's Hertz contact radius under ``force`` (N) exceeds SKIN_CONTACT_RATIO times its thickness."""
+    radius, thickness = float(scene.contact_radius(force)), float(scene.thickness)
+    if radius > SKIN_CONTACT_RATIO * thickness:
+        warnings.warn(
+            f"load.normal: at {force:g} N the sphere's Hertz contact radius is {radius * 1e3:.3g} mm, "
+            f"{radius / thickness:.2g} times the {thickness * 1e3:g} mm skin; the half-space contact patch holds "
+            f"to about {SKIN_CONTACT_RATIO:g} (a smaller force, a smaller indenter.radius or a stiffer layer)",
+            PlausibilityWarning,
+            stacklevel=2,
+        )
+
+
+def _skin_chips(sensor):
+    """The skin's chips (S, 2) (m) and the key that placed them: sensor.chips, or sensor.grid at sensor.pitch."""
+    if sensor.has("grid") == sensor.has("chips"):
+        raise SpecError(
+            "sensor.chips: expected the chips' positions [[x, y], ...] or sensor.grid with sensor.pitch "
+            f"({'both were' if sensor.has('grid') else 'neither was'} given)"
+        )
+    if sensor.has("grid"):
+        return np.asarray(grid_positions(_grid(sensor), sensor.quantity("pitch", "m")))[:, :2], "sensor.grid"
+    return np.asarray(sensor.points("chips", default=None, plane=True), dtype=float).reshape(-1, 2), "sensor.chips"
+
+
+def _skin_scene(spec, fidelity):
+    if fidelity is not None:
+        raise SpecError(f"fidelity: the skin has one mechanics model (a bonded linear layer), got {fidelity!r}")
+    for name in ("geometry", "inductors", "pole"):
+        if name in spec:
+            raise SpecError(f"[{name}]: a skin reads no [{name}] table (its layer lies on the board at z = 0)")
+    magnet = Table(spec, "magnet")
+    magnet.choice("shape", ("skin",))
+    polarization = magnet.quantity("polarization", "T")
+    direction = _direction(magnet)
+    cells = _counts(magnet, "cells", [16, 16, 8], "[along x, along y, through the thickness]")
+    magnet.done()
+    mechanics = Table(spec, "mechanics")
+    mechanics.choice("model", ("bonded_layer",))
+    thickness = mechanics.quantity("thickness", "m")
+    size = mechanics.quantities("size", "m", length=2)
+    shear_modulus = mechanics.quantity("shear_modulus", "Pa")
+    poisson_ratio = mechanics.quantity("poisson_ratio", "1")
+    mechanics.done()
+    indenter = Table(spec, "indenter")
+    radius = indenter.quantity("radius", "m")
+    indenter.done()
+    sensor = Table(spec, "sensor")
+    sensor.choice("model", ("hall3d",))
+    hall = _hall(sensor)
+    chips, chips_key = _skin_chips(sensor)
+    depth = sensor.quantity("depth", "m")
+    map_grid = _counts(sensor, "map_grid", [5, 5], "[along x, along y]")
+    sensor.done()
+    if chips.shape[0] < SKIN_MIN_CHIPS:
+        raise SpecError(
+            f"{chips_key}: {chips.shape[0]} chip(s) read 3 numbers each, too few for a contact's position and "
+            f"3 forces (5 unknowns); expected at least {SKIN_MIN_CHIPS} chips"
+        )
+    check_on_skin((chips_key, chips_key), chips, size)
+    if not depth > 0.0:
+        raise SpecError(
+            f"sensor.depth: chips {depth * 1e3:g} mm below the board's surface would sit in the skin; expected "
+            "a depth above 0 mm (the chips' sensing points under the skin's bottom face)"
+        )
+    check_fits(
+        f"magnet.cells = {list(cells)}, {chips.shape[0]} chips",
+        15.0 * math.prod(cells) * chips.shape[0],
+        what="the cells' field at the chips and its derivatives",
+    )
+    effects = _hall_effects(spec, hall)
+    # the outputs' noise: the listed noise effect's, else one LSB per axis (scene.noise's default)
+    noise = next((effect.sigma for effect in effects if effect.name == "noise"), hall.lsb)
+    return SkinScene(
+        thickness=jnp.asarray(thickness),
+        size=jnp.asarray(size),
+        polarization=jnp.asarray(polarization),
+        shear_modulus=jnp.asarray(shear_modulus),
+        poisson_ratio=jnp.asarray(poisson_ratio),
+        sphere_radius=jnp.asarray(radius),
+        chips=jnp.asarray(chips),
+        depth=jnp.asarray(depth),
+        noise=jnp.broadcast_to(jnp.asarray(noise, dtype=float), (3,)),
+        hall=hall,
+        effects=effects,
+        direction=(0.0, 0.0, 1.0) if direction is None else tuple(float(v) for v in direction),
+        cells=cells,
+        map_grid=map_grid,
+    )
+
+
 def check_carried_loads(scene, loads):
     """SpecError naming the [load] key of a shear force that ``scene``'s mechanics does not
     carry: a dome's model takes the normal load only (a shear would be dropped, the magnet
@@ -588,6 +716,8 @@ def check_field_samples(scene, points):
     quadrature points per chip x 3 components (:func:`magdesign.spec.sizes.check_fits`)."""
     if isinstance(scene, FilmScene):
         sensors = int(np.prod(scene.grid))
+    elif isinstance(scene, SkinScene):
+        sensors = int(scene.chips.shape[0])
     else:
         sensors = int(np.shape(getattr(scene, "sensor_positions", np.zeros((1, 3))))[0])
     quadrature = max((effect.points for effect in scene.effects if effect.name == "area_averaging"), default=1)
@@ -598,7 +728,7 @@ def check_field_samples(scene, points):
     )
 
 
-_SCENES = {"cylinder": _cylinder_scene, "film": _film_scene, "plate": _pole_scene}
+_SCENES = {"cylinder": _cylinder_scene, "film": _film_scene, "plate": _pole_scene, "skin": _skin_scene}
 
 
 def scene_from_spec(spec: dict, *, fidelity: str | None = None):
@@ -615,7 +745,12 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
         raise SpecError(
             f"soft: [[soft]] parts are magnetised by cylinder magnets (magnet.shape = 'cylinder'), not a {shape}"
         )
+    if "indenter" in spec and shape != "skin":
+        raise SpecError(f"indenter: an [indenter] presses a skin (magnet.shape = 'skin'), not a {shape}")
     scene = _SCENES[shape](spec, fidelity)
+    if isinstance(scene, SkinScene):
+        check_on_skin(("load.contact_x", "load.contact_y"), loads.contact, np.asarray(scene.size))
+        check_contact_patch(scene, float(loads.max_normal))
     check_carried_loads(scene, loads)
     check_field_samples(scene, points)
     # a time derivative (the inductors' EMF) or a lag needs a time series

@@ -65,13 +65,16 @@ class Table:
             raise SpecError(f"{self.name}.{key}: expected a list of {count}quantities in {unit}, got {echo(value)}")
         return [self._number(key, item, unit) for item in value]
 
-    def points(self, key, unit="m", default=_MISSING):
-        """A list of [x, y, z] quantities as lists of SI floats (sensor positions)."""
-        value = self._get(key, default, "points", unit)
+    def points(self, key, unit="m", default=_MISSING, *, plane=False):
+        """A list of [x, y, z] quantities (``plane``: [x, y]) as lists of SI floats (sensor positions)."""
+        value = self._get(key, default, "plane points" if plane else "points", unit)
         if value is default and default is not _MISSING:
             return default
-        if not isinstance(value, list) or not all(isinstance(row, list) and len(row) == 3 for row in value):
-            raise SpecError(f"{self.name}.{key}: expected a list of [x, y, z] quantities in {unit}, got {echo(value)}")
+        axes = ("x", "y") if plane else ("x", "y", "z")
+        if not isinstance(value, list) or not all(isinstance(row, list) and len(row) == len(axes) for row in value):
+            raise SpecError(
+                f"{self.name}.{key}: expected a list of [{', '.join(axes)}] quantities in {unit}, got {echo(value)}"
+            )
         return [[self._number(key, item, unit) for item in row] for row in value]
 
     def _number(self, key, item, unit):

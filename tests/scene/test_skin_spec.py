@@ -1,0 +1,229 @@
+"""The magnetic skin from a spec: the example builds the skin it states, every bad input is
+a one-line SpecError naming its key, and a design of a small skin solves from the command line."""
+
+import json
+import warnings
+
+import jax
+import jax.numpy as jnp
+import magpylib
+import numpy as np
+import pytest
+from scene_helpers import EXAMPLES, example
+
+from magdesign.cli import main
+from magdesign.scene import (
+    Loads,
+    SimulationResult,
+    loads_from_spec,
+    parameters,
+    scene_from_spec,
+    simulate,
+    simulation_json,
+    simulation_table,
+    with_parameters,
+)
+from magdesign.scene.effects import EFFECT_NAMES
+from magdesign.scene.skin_scene import SkinScene
+from magdesign.spec.checks import PlausibilityWarning
+from magdesign.units import SpecError
+
+
+def skin(edit=None):
+    spec = example("skin")
+    if edit is not None:
+        edit(spec)
+    return spec
+
+
+def test_the_example_builds_the_skin_it_states():
+    scene = scene_from_spec(skin())
+    assert isinstance(scene, SkinScene)
+    cross = [[0.0, 0.0], [0.01, 0.0], [-0.01, 0.0], [0.0, 0.01], [0.0, -0.01]]
+    np.testing.assert_allclose(scene.chips, cross, atol=1e-15)
+    assert scene.cells == (4, 4, 2) and scene.map_grid == (2, 2) and scene.direction == (0.0, 0.0, 1.0)
+    assert {name: float(value) for name, value in parameters(scene).items()} == pytest.approx(
+        {
+            "magnet.polarization": 0.02,
+            "mechanics.thickness": 2e-3,
+            "mechanics.shear_modulus": 100e3,
+            "sensor.depth": 1e-3,
+            "indenter.radius": 2e-3,
+        }
+    )
+    np.testing.assert_allclose(scene.size, [0.03, 0.03])
+    # without the noise effect the outputs' noise is one LSB: the MLX90393 datasheet's 0.150 uT
+    # (x, y) and 0.242 uT (z) per count at GAIN_SEL = 7, RES_XYZ = 0
+    np.testing.assert_allclose(scene.noise, [0.150e-6, 0.150e-6, 0.242e-6], rtol=1e-12)
+    assert [effect.name for effect in scene.effects] == ["background", "saturation"]
+    loads = loads_from_spec(skin())
+    np.testing.assert_allclose(loads.contact[-1], [2e-3, 1e-3])
+    np.testing.assert_allclose(loads.normal[-1], 0.2)
+
+
+def test_a_grid_places_the_chips_and_the_noise_effect_sets_the_outputs_noise():
+    def edit(spec):
+        spec["sensor"].pop("chips")
+        spec["sensor"].update(grid=[2, 2], pitch="8 mm")
+        spec["magnet"]["direction"] = [1, 0, 0]  # in-plane, normalised
+        spec["scene"].update(effects=["noise"], noise="2 uT")
+
+    scene = scene_from_spec(skin(edit))
+    assert sorted(map(tuple, np.asarray(scene.chips).round(12))) == [
+        (-0.004, -0.004),
+        (-0.004, 0.004),
+        (0.004, -0.004),
+        (0.004, 0.004),
+    ]
+    assert scene.direction == (1.0, 0.0, 0.0)
+    np.testing.assert_allclose(scene.noise, [2e-6] * 3)
+
+
+def test_the_indenters_radius_is_a_design_parameter():
+    scene = with_parameters(scene_from_spec(skin()), {"indenter.radius": 3e-3})
+    assert float(scene.sphere_radius) == 3e-3
+    # Hertz: a = (3 F R / (4 E*))^(1/3), E* = 2 mu / (1 - nu)
+    e_star = 2 * 100e3 / (1 - 0.49)
+    assert float(scene.contact_radius(jnp.asarray(0.2))) == pytest.approx((3 * 0.2 * 3e-3 / (4 * e_star)) ** (1 / 3))
+
+
+@pytest.mark.parametrize(
+    "edit, key, expected",
+    [
+        (lambda s: s["sensor"].update(chips=[["0 mm", "0 mm"], ["20 mm", "0 mm"]]), "sensor.chips", "off the 30 x 30"),
+        (lambda s: s["sensor"].update(chips=[["0 mm", "0 mm"]]), "sensor.chips", "at least 2 chips"),
+        (lambda s: s["sensor"].update(chips=[["0 mm", "0 mm", "0 mm"]]), "sensor.chips", "[x, y] quantities in m"),
+        (lambda s: s["sensor"].update(grid=[2, 2], pitch="8 mm"), "sensor.chips", "both were given"),
+        (lambda s: s["sensor"].pop("chips"), "sensor.chips", "neither was given"),
+        (lambda s: s["sensor"].update(depth="0 mm"), "sensor.depth", "above 0 mm"),
+        (lambda s: s["sensor"].pop("depth"), "sensor.depth", "missing"),
+        (lambda s: s["sensor"].update(map_grid=[2, 0]), "sensor.map_grid", "positive integers"),
+        (lambda s: s["sensor"].update(positions=[["0 mm", "0 mm", "0 mm"]]), "sensor.positions", "unknown key"),
+        (lambda s: s["magnet"].update(cells=[4, 4]), "magnet.cells", "3 positive integers"),
+        (lambda s: s["magnet"].update(direction=[0, 0, 0]), "magnet.direction", "nonzero"),
+        (lambda s: s["magnet"].update(polarization="20 mm"), "magnet.polarization", "in T"),
+        (lambda s: s["magnet"].update(remanence="1 T"), "magnet.remanence", "unknown key"),
+        (lambda s: s["mechanics"].update(model="layer"), "mechanics.model", "'bonded_layer'"),
+        (lambda s: s["mechanics"].update(poisson_ratio=0.5), "mechanics.poisson_ratio", "not physical"),
+        (lambda s: s["mechanics"].update(size=["30 mm"]), "mechanics.size", "list of 2"),
+        (lambda s: s.pop("indenter"), "[indenter]", "missing table"),
+        (lambda s: s["indenter"].update(radius="-2 mm"), "indenter.radius", "not physical"),
+        (lambda s: s["load"].update(contact_y=["0 mm", "16 mm"]), "load.contact_y", "at most 15 mm"),
+        (lambda s: s.update(soft=[]), "soft", "not a skin"),
+        (lambda s: s.update(geometry={"gap": "1 mm"}), "[geometry]", "no [geometry] table"),
+    ],
+)
+def test_bad_input_names_the_key_on_one_line(edit, key, expected):
+    with pytest.raises(SpecError) as error:
+        scene_from_spec(skin(edit))
+    message = str(error.value)
+    assert message.startswith(key) and expected in message and "\n" not in message, message
+
+
+def test_the_skins_tables_are_refused_elsewhere_and_a_fidelity_by_the_skin():
+    film = example("film_hall")
+    film["indenter"] = {"radius": "2 mm"}
+    with pytest.raises(SpecError, match=r"^indenter: .*not a film"):
+        scene_from_spec(film)
+    film = example("film_hall")
+    film["sensor"]["map_grid"] = [2, 2]
+    with pytest.raises(SpecError, match=r"^sensor.map_grid: unknown key"):
+        scene_from_spec(film)
+    with pytest.raises(SpecError, match=r"^fidelity: the skin has one"):
+        scene_from_spec(skin(), fidelity="hooke")
+
+
+def test_a_contact_patch_wider_than_the_model_holds_warns_naming_the_load():
+    def edit(spec):
+        spec["load"]["normal"] = ["0 N", "5 N"]
+
+    with pytest.warns(PlausibilityWarning, match=r"^load.normal: at 5 N .* times the 2 mm skin"):
+        scene_from_spec(skin(edit))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene_from_spec(skin())  # the example's 0.9 mm patch under 0.2 N: no warning
+
+
+def test_a_bad_skin_spec_exits_2_naming_the_key(tmp_path, capsys):
+    path = tmp_path / "skin.toml"
+    path.write_text((EXAMPLES / "skin.toml").read_text().replace('depth = "1 mm"', 'depth = "-1 mm"'))
+    assert main(["simulate", str(path)]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].count("sensor.depth") == 1
+
+
+# A small skin's design: the polarisation that brings the normal-force resolution to a target.
+SMALL_DESIGN = """
+[design.variables]
+"magnet.polarization" = { lower = "5 mT", upper = "80 mT" }
+
+[design.targets]
+force_resolution_normal = "TARGET"
+
+[design.limits]
+saturation_ratio = { upper = 1 }
+"""
+
+
+@pytest.mark.slow  # compiles the outputs' Jacobians through the layer's transforms, and their derivatives
+def test_a_small_skins_design_solves_from_the_command_line(tmp_path, capsys):
+    text = (EXAMPLES / "skin.toml").read_text()
+    text = text.replace("cells = [4, 4, 2]", "cells = [2, 2, 1]").replace("map_grid = [2, 2]", "map_grid = [1, 1]")
+    # the resolution scales as 1 / J0 (the readings' Jacobian is linear in it): from the start's value,
+    # the target at twice the start's polarization is half the start's resolution
+    start = tmp_path / "start.toml"
+    start.write_text(text)
+    assert main(["simulate", str(start), "--json"]) == 0
+    resolution = json.loads(capsys.readouterr().out)["outputs"]["force_resolution_normal"]
+    path = tmp_path / "design.toml"
+    path.write_text(text + SMALL_DESIGN.replace("TARGET", f"{resolution / 2:.12g} N"))
+    assert main(["solve", str(path), "--json"]) == 0
+    solved = json.loads(capsys.readouterr().out)
+    assert solved["status"] == "successful"
+    assert solved["parameters"]["magnet.polarization"] == pytest.approx(0.04, rel=1e-4)
+
+
+def test_the_simulation_table_shows_a_skins_contact_point_in_line_with_its_readings():
+    """A skin's mechanics' state is its load (x, y, Fn, F_x, F_y): the table shows the contact
+    point (mm), and every row has as many columns as the header."""
+    loads = Loads(jnp.array([0.0, 0.2]), contact=jnp.array([2e-3, 1e-3]))
+    state = jnp.concatenate([loads.contact, loads.normal[:, None], loads.shear], axis=-1)
+    field = jnp.arange(12.0).reshape(2, 2, 3) * 1e-3
+    result = SimulationResult(loads, jnp.ones(2, bool), state, field, field, field, {}, ("Bx", "By", "Bz"), "T")
+    header, *rows = simulation_table(result).splitlines()
+    assert header.split()[8:12] == ["x", "(mm)", "y", "(mm)"]
+    assert all(len(row.split()) == 4 + 2 + 6 for row in rows)
+    assert rows[1].split()[4:7] == ["2", "1", "6"]  # x, y (mm), then sensor 0's Bx (mT)
+    assert simulation_json(result)["units"]["displacement"] == "m, m, N, N, N"
+
+
+def test_at_rest_the_specs_chips_read_magpylibs_block():
+    """The spec's layer (sides, thickness above z = 0, a tilted polarisation) and chips (x, y,
+    depth below z = 0) against magpylib's cuboid of the same polarisation, unloaded."""
+
+    def edit(spec):
+        spec["magnet"]["direction"] = [1, 0, 1]
+
+    scene = scene_from_spec(skin(edit))
+    got = np.asarray(scene.readings_at(jnp.zeros(5)))
+    polarization = 0.02 * np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0)
+    block = magpylib.magnet.Cuboid(polarization=polarization, dimension=(0.03, 0.03, 0.002), position=(0, 0, 0.001))
+    chips = [[0.0, 0.0, -1e-3], [0.01, 0.0, -1e-3], [-0.01, 0.0, -1e-3], [0.0, 0.01, -1e-3], [0.0, -0.01, -1e-3]]
+    np.testing.assert_allclose(got, block.getB(np.array(chips)), rtol=1e-9, atol=1e-15)
+
+
+def test_every_effect_traces_through_the_skins_chain():
+    def edit(spec):
+        spec["scene"] = {"effects": list(EFFECT_NAMES)}
+
+    spec = skin(edit)
+    scene, loads = scene_from_spec(spec), loads_from_spec(spec)
+    assert [effect.name for effect in scene.effects] == list(EFFECT_NAMES)
+    result = jax.eval_shape(lambda: simulate(scene, loads, key=jax.random.key(0)))
+    assert result.readings.shape == (3, 5, 3)
+
+
+@pytest.mark.slow  # compiles the layer's displacement and draws the field on a 181 x 181 grid: about a minute
+def test_the_show_command_draws_the_skin(tmp_path):
+    picture = tmp_path / "skin.png"
+    assert main(["show", str(EXAMPLES / "skin.toml"), "--plot", str(picture), "--quiet"]) == 0
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
