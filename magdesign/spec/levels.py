@@ -16,9 +16,9 @@ import math
 from collections.abc import Callable, Mapping
 from typing import NamedTuple
 
-import equinox as eqx
 import jax.numpy as jnp
 
+from magdesign import _export
 from magdesign._progress import stage
 from magdesign.design import solve
 from magdesign.design.report import DesignResult, format_quantity
@@ -202,7 +202,7 @@ def grid_factor(rank: float, other: float, order: float) -> float:
     return GCI_SAFETY * (ratio if rank < other else 1.0) / (ratio - 1.0)
 
 
-_evaluate = eqx.filter_jit(outputs)
+_evaluate = _export.filter_jit(outputs, "outputs")
 
 
 def outputs_at(spec: dict, values: Mapping[str, float] | None = None) -> dict[str, float]:
