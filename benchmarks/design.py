@@ -1,6 +1,6 @@
 """Speed of the design solver on the default design, and its QP subproblem. Run by hand:
 
-    .venv/bin/python benchmarks/design.py [--skip-axisymmetric] [--accuracy-only]
+    .venv/bin/python benchmarks/design.py [--skip-axisymmetric] [--accuracy-only | --second-run-only]
 
 Prints:
 - the default design (the spec `magdesign solve` runs with no argument, its scene model):
@@ -12,6 +12,15 @@ Prints:
   (``--accuracy-only``: these rows alone);
 - the same first call at the Reissner level in new processes, as `magdesign solve` makes it:
   on an empty persistent cache, and three times with the cache the first run filled;
+- the second run of whole commands in new processes, the caches (compiled and exported
+  programs, see magdesign._export) filled by a first: `solve --fidelity reissner` (also of a
+  spec with other numbers), `solve` with the axisymmetric confirmation (unless skipped),
+  `simulate` and a 5-point Reissner `sweep` (also 7 other points): the first run's wall
+  time and the medians of five second runs' wall and CPU (user + sys) times
+  (``--second-run-only``: these rows alone); then where a second Reissner solve goes
+  (imports, spec, solve, estimate, report; within solve and estimate: lowering, loading
+  from the compilation cache and compiling, from JAX's monitoring events, and the rest:
+  tracing and running);
 - where that first call goes, in a new process without the cache: the seconds (wall and
   CPU) of tracing the solver's program, lowering it to StableHLO and compiling it with XLA,
   and the compiled program's size (fusions: XLA compiles each into a kernel of its own);
@@ -123,6 +132,133 @@ for stage, (a, b) in (("trace", (began, traced_at)), ("lower", (traced_at, lower
 text = compiled.as_text()
 print("size", len(re.findall(r"= [^=]* fusion\\(", text)), len(re.findall(r"\\n  +(?:ROOT )?%", text)))
 """
+
+
+# Where a second `magdesign solve --fidelity reissner` goes, in a new process whose caches a
+# first run filled: each stage's wall and CPU seconds, from timers around the command's
+# steps and JAX's own monitoring events (lowering, loading from the compilation cache,
+# compiling: wall only); "tracing+run" is the rest of the solve and estimate steps (JAX's
+# tracing events count a nested program's trace again in its caller's).
+SECOND_RUN_STAGES = """
+import contextlib, io, sys, time
+began = time.perf_counter(), time.process_time()
+import jax
+import magdesign.cli as cli
+imported = time.perf_counter(), time.process_time()
+stages = {}
+def timed(name, fn):
+    def call(*args, **kwargs):
+        start = time.perf_counter(), time.process_time()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            wall, cpu = stages.get(name, (0.0, 0.0))
+            stages[name] = wall + time.perf_counter() - start[0], cpu + time.process_time() - start[1]
+    return call
+events = {}
+def heard(event, seconds, **kwargs):
+    events[event] = events.get(event, 0.0) + seconds
+jax.monitoring.register_event_duration_secs_listener(heard)
+for name, stage in (("default_spec", "spec"), ("problem_from_spec", "spec"), ("solve_problem", "solve"),
+                    ("estimate", "estimate")):
+    setattr(cli, name, timed(stage, getattr(cli, name)))
+with contextlib.redirect_stdout(io.StringIO()):
+    start = time.perf_counter(), time.process_time()
+    assert cli.main(sys.argv[1:]) == 0
+    done = time.perf_counter(), time.process_time()
+print("imports", imported[0] - began[0], imported[1] - began[1])
+for name, (wall, cpu) in stages.items():
+    print(name, wall, cpu)
+rest = sum(wall for wall, _ in stages.values()), sum(cpu for _, cpu in stages.values())
+print("report", done[0] - start[0] - rest[0], done[1] - start[1] - rest[1])
+retrieved = events.get("/jax/compilation_cache/cache_retrieval_time_sec", 0.0)
+lowering = events.get("/jax/core/compile/jaxpr_to_mlir_module_duration", 0.0)
+compiling = events.get("/jax/core/compile/backend_compile_duration", 0.0) - retrieved
+print("lowering", lowering)
+print("cache-load", retrieved)
+print("compiling", compiling)
+print("tracing+run", stages["solve"][0] + stages["estimate"][0] - lowering - retrieved - compiling)
+"""
+
+# The second run of each command, in new processes: the commands that benchmarks/design.py
+# times as whole commands, each once to fill the caches, then SECOND_RUNS times.
+SECOND_RUNS = 5
+OTHER_NUMBERS = "0.3 mm/N"  # the default design's compliance target in the spec "with other numbers"
+
+
+def _command(arguments, env):
+    """(wall, user + sys CPU) seconds of ``python -m magdesign ARGUMENTS`` in a new process."""
+    began, before = time.perf_counter(), os.times()
+    subprocess.run([sys.executable, "-m", "magdesign", *arguments], env=env, capture_output=True, check=True)
+    after = os.times()
+    return (
+        time.perf_counter() - began,
+        after.children_user + after.children_system - before.children_user - before.children_system,
+    )
+
+
+def second_run_rows(skip_axisymmetric):
+    """Each command's first run (caches empty) and the median of SECOND_RUNS second runs
+    (wall and CPU), new processes all; then the stages of a second Reissner solve."""
+    default = "magdesign/design/default.toml"
+    with tempfile.TemporaryDirectory() as cache:
+        other = os.path.join(cache, "other_numbers.toml")
+        with open(default) as file:
+            text = file.read()
+        with open(other, "w") as file:
+            file.write(text.replace('compliance = "0.32 mm/N"', f'compliance = "{OTHER_NUMBERS}"'))
+        commands = [
+            ("solve --fidelity reissner", ["solve", "--fidelity", "reissner", "--json"]),
+            (
+                f"  the same, a spec with compliance {OTHER_NUMBERS}",
+                ["solve", other, "--fidelity", "reissner", "--json"],
+            ),
+            ("simulate", ["simulate", default, "--json"]),
+            (
+                "sweep --fidelity reissner, 5 points",
+                ["sweep", default, "--over", "compliance=0.3mm/N:0.34mm/N:5", "--fidelity", "reissner", "--json"],
+            ),
+            (
+                "  the same, 7 other points",
+                ["sweep", default, "--over", "compliance=0.29mm/N:0.35mm/N:7", "--fidelity", "reissner", "--json"],
+            ),
+        ]
+        if not skip_axisymmetric:
+            commands.insert(2, ("solve (axisymmetric confirmation)", ["solve", "--json"]))
+        env = {**os.environ, "MAGDESIGN_CACHE_DIR": cache, "MAGDESIGN_NO_CACHE": "", "MAGDESIGN_NO_EXPORT": ""}
+        rows = [("second run, new process", "first run wall (s)", "wall (s), median", "CPU (s), median", "walls (s)")]
+        for name, arguments in commands:
+            first = _command(arguments, env)[0] if not name.startswith("  ") else float("nan")
+            runs = [_command(arguments, env) for _ in range(SECOND_RUNS)]
+            walls, cpus = zip(*runs)
+            rows.append(
+                (
+                    name,
+                    f"{first:.1f}",
+                    f"{np.median(walls):.2f}",
+                    f"{np.median(cpus):.2f}",
+                    " ".join(f"{w:.1f}" for w in walls),
+                )
+            )
+        table(rows)
+        print()
+        stages = {}
+        for _ in range(SECOND_RUNS):
+            out = subprocess.run(
+                [sys.executable, "-c", SECOND_RUN_STAGES, "solve", "--fidelity", "reissner", "--json", "--quiet"],
+                env=env,
+                capture_output=True,
+                text=True,
+                check=True,
+            )
+            for line in out.stdout.splitlines():
+                name, *numbers = line.split()
+                stages.setdefault(name, []).append([float(n) for n in numbers])
+        rows = [("second solve --fidelity reissner, stage", "wall (s), median", "CPU (s), median")]
+        for name, values in stages.items():
+            values = np.median(np.array(values), axis=0)
+            rows.append((name, f"{values[0]:.2f}", f"{values[1]:.2f}" if len(values) > 1 else ""))
+        table(rows)
 
 
 def first_call_rows():
@@ -344,6 +480,9 @@ def accuracy_rows():
 
 
 def main():
+    if "--second-run-only" in sys.argv:
+        second_run_rows("--skip-axisymmetric" in sys.argv)
+        return
     accuracy_rows()
     if "--accuracy-only" in sys.argv:
         return
@@ -351,6 +490,8 @@ def main():
     design_rows("--skip-axisymmetric" in sys.argv)
     print()
     fresh_process_rows()
+    print()
+    second_run_rows("--skip-axisymmetric" in sys.argv)
     print()
     first_call_rows()
     print()

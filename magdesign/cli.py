@@ -21,11 +21,14 @@ levels ..."), and "wrote FILE" for each file written; a bar, on a terminal only,
 point of a sweep. ``--quiet`` silences both; errors and warnings still print.
 
 Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax/<this CPU>; see
-:func:`cache_directory`; MAGDESIGN_NO_CACHE=1 turns it off).
+:func:`cache_directory`; MAGDESIGN_NO_CACHE=1 turns it off), and the traced programs of a
+solve, simulate or sweep beside it (:func:`export_directory`, :mod:`magdesign._export`;
+MAGDESIGN_NO_EXPORT=1 turns them off), so that a second run neither traces nor compiles.
 """
 
 import argparse
 import hashlib
+import importlib
 import importlib.metadata
 import json
 import math
@@ -38,12 +41,10 @@ from pathlib import Path
 
 import jax
 
-from magdesign import _progress, accuracy
+from magdesign import _export, _progress
 from magdesign._progress import stage, wrote
 from magdesign.design import solve as solve_problem
 from magdesign.design import sweep as sweep_problem
-from magdesign.design import tolerance as tolerance_analysis
-from magdesign.design.plot import plot_design, plot_sweep
 from magdesign.design.report import format_quantity
 from magdesign.design.solve import usable_cores
 from magdesign.scene import (
@@ -54,7 +55,6 @@ from magdesign.scene import (
     with_parameters,
 )
 from magdesign.scene.core import warn_if_clipping
-from magdesign.scene.picture import plot_scene
 from magdesign.spec.design import (
     default_spec,
     exact_levels,
@@ -69,6 +69,15 @@ from magdesign.spec.sizes import check_fits
 from magdesign.spec.sweep import input_units, sweep_points
 from magdesign.spec.tolerance import tolerance_problem_from_spec
 from magdesign.units import SpecError
+
+
+# Modules that load matplotlib are imported by the commands that use them, so that a
+# solve, simulate or sweep starts without it; ``cli.accuracy`` is the accuracy module.
+def __getattr__(name):
+    if name == "accuracy":
+        return importlib.import_module("magdesign.accuracy")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 EXIT_INTERNAL = 1
 EXIT_BAD_SPEC = 2
@@ -104,6 +113,13 @@ def cache_directory():
         return Path(os.environ["MAGDESIGN_CACHE_DIR"]) / cpu_tag()
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(base) / "magdesign" / "jax" / cpu_tag()
+
+
+def export_directory(directory):
+    """Where the command keeps its exported programs (:mod:`magdesign._export`), beside
+    the compiled programs' ``directory`` (:func:`cache_directory`, a CPU's folder): the
+    same CPU's folder in the folder "exported" next to it."""
+    return directory.parent / "exported" / directory.name
 
 
 def use_compilation_cache(debug=False):
@@ -277,6 +293,8 @@ def scene_at_start(spec):
 
 
 def run_show(args):
+    from magdesign.scene.picture import plot_scene  # matplotlib: loaded by the commands that draw
+
     spec = load_spec(args.spec)
     stage(f"writing {args.plot}: the sensor at rest and at the largest load")
     plot_scene(scene_at_start(spec)[0], loads_from_spec(spec), args.plot, title=args.spec)
@@ -363,6 +381,8 @@ def run_solve(args):
     if args.write:
         _write_answer(args, result)
     if args.plot:
+        from magdesign.design.plot import plot_design
+
         stage(f"writing {args.plot}: each target and limit along each variable, at {levels}")
         plot_design(problem, result, args.plot)
         wrote(args.plot)
@@ -441,6 +461,9 @@ def _difference(cheap, exact, cheap_levels, exact_levels_name):
     return "\n".join(lines)
 
 
+# simulate, kept exported on disk (magdesign._export) where the compilation cache is on
+_simulate = _export.filter_jit(simulate, "simulate")
+
 SWEEP_TABLE_ROWS = 200  # a longer sweep prints its summary only (see --csv / --json)
 
 
@@ -510,6 +533,8 @@ def run_sweep(args):
             print(result.table())
         print(f"magdesign sweep: {result.summary()}" + (f"; every point written to {args.csv}" if args.csv else ""))
     if args.plot:
+        from magdesign.design.plot import plot_sweep
+
         stage(f"writing {args.plot}")
         plot_sweep(result, args.plot)
         wrote(args.plot)
@@ -522,7 +547,7 @@ def run_simulate(args):
     loads = loads_from_spec(spec)
     levels = fidelity_levels(spec)
     stage(f"simulating the load sweep{' at ' + levels if levels else ''} ({FIRST_CALL})")
-    result = simulate(scene, loads, key=jax.random.key(0))
+    result = _simulate(scene, loads, key=jax.random.key(0))
     warn_if_clipping(scene, result)
     # the outputs read no reading after the reading effects: the noisy simulation gives them too
     values = {name: float(value) for name, value in scene.outputs(result).items()}
@@ -554,6 +579,8 @@ def run_simulate(args):
 
 
 def run_tolerance(args):
+    from magdesign.design import tolerance as tolerance_analysis
+
     if args.samples < 1:
         raise SpecError(f"--samples: expected a positive number of samples, got {args.samples}")
     if args.robust is not None and not (math.isfinite(args.robust) and args.robust > 0):
@@ -619,6 +646,8 @@ def run_tolerance(args):
 
 
 def run_accuracy(args):
+    from magdesign import accuracy
+
     rows = accuracy.measure(quick=args.quick)
     print(json_text([row._asdict() for row in rows]) if args.json else accuracy.table(rows))
     if args.plot:
@@ -748,6 +777,8 @@ def main(argv=None):
         "tolerance": run_tolerance,
     }[args.command]
     _progress.enable(None if args.quiet else f"magdesign {args.command}")
+    kept, directory = _export.directory(), cache_directory()  # the command's exported programs, for its run
+    _export.enable(None if directory is None else export_directory(directory))
     stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
     unraisable, sys.unraisablehook = sys.unraisablehook, _unraisable
     try:
@@ -785,6 +816,7 @@ def main(argv=None):
         )
     finally:
         _progress.enable(None)
+        _export.enable(kept)
         sys.stdout, sys.unraisablehook = stdout, unraisable
 
 

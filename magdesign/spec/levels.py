@@ -18,9 +18,9 @@ import math
 from collections.abc import Callable, Mapping
 from typing import NamedTuple
 
-import equinox as eqx
 import jax.numpy as jnp
 
+from magdesign import _export
 from magdesign._numerics import ROUNDING_SPREAD
 from magdesign._progress import stage
 from magdesign.design import solve
@@ -221,7 +221,7 @@ def _error(ladder: Ladder, value: float, moved: float, rank: float, other: float
     return float(ladder.mesh_error(value, moved, other > rank))
 
 
-_evaluate = eqx.filter_jit(outputs)
+_evaluate = _export.filter_jit(outputs, "outputs")
 
 
 def outputs_at(spec: dict, values: Mapping[str, float] | None = None) -> dict[str, float]:

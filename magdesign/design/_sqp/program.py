@@ -11,6 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
+from magdesign import _export
 from magdesign._tracing import compiler_options, errors_as_nan, gc_paused
 from magdesign.design._sqp.core import CoreSolution, _core
 from magdesign.design._sqp.jet import Settings, problem_arrays
@@ -105,13 +106,20 @@ def _host(problem):
 def _compiled(key, batched):
     """The jitted core of one structure of (problem, settings), ``key`` a pair of
     :func:`_split` keys: (arrays, y0, theta) -> packed solution, ``arrays`` the pair of
-    their array leaves, vmapped over y0 and theta if ``batched``."""
+    their array leaves, vmapped over y0 and theta if ``batched``; kept exported on disk
+    where :mod:`magdesign._export` is on (``key`` is the structure it is kept by)."""
 
     def run(arrays, y0, theta):
         problem, settings = (_joined(part_key, part) for part_key, part in zip(key, arrays))
         return _packed(problem, y0, theta, settings)
 
-    return jax.jit(jax.vmap(run, in_axes=(None, 0, 0)) if batched else run, compiler_options=compiler_options())
+    return _export.jit(
+        jax.vmap(run, in_axes=(None, 0, 0)) if batched else run,
+        "solve-batch" if batched else "solve",
+        repr(key),
+        compiler_options=compiler_options(),
+        batched=(1, 2) if batched else (),
+    )
 
 
 def _joined(key, arrays):

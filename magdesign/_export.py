@@ -1,0 +1,245 @@
+"""Programs kept on disk as ``jax.export`` artefacts, so that a new process skips tracing.
+
+JAX's persistent compilation cache keeps compiled executables, but a new process must
+still trace and lower a program to find its cache key, which for the design solver takes
+longer than the solve. Here a program of one structure is exported once (StableHLO, with
+every array argument an argument of the program: the spec's numbers are never constants
+in it), serialized beside the compilation cache and deserialized by later processes; the
+compilation cache then holds the executable of the deserialized program.
+
+An entry is keyed by a text that names everything the trace depends on besides its
+arguments' shapes and dtypes (the caller's ``structure``: the problem's tree structure,
+with its static fields), by those shapes and dtypes, and by the versions of jax, jaxlib and
+magdesign (with a digest of its source files' names, sizes and times, so that an edited
+checkout does not reuse a stale program). The folder is named by the CPU (see
+``magdesign.cli.cache_directory``).
+A structure whose text holds an object's address ("at 0x...", which differs from process
+to process and so names no structure) is not kept. An entry that cannot be read, was
+written by other versions or for another structure is ignored and written again. Where
+exporting fails (a program with a host callback), the program is traced and jitted as
+usual.
+
+Off unless :func:`enable` names a folder (the command does for its run, see
+``magdesign.cli.export_directory``); MAGDESIGN_NO_EXPORT=1 keeps it off.
+"""
+
+import functools
+import hashlib
+import importlib.util
+import os
+import pickle
+import re
+import tempfile
+from pathlib import Path
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jaxlib
+import numpy as np
+
+import magdesign
+from magdesign import _tracing
+
+# The layout of an entry; a change makes every older entry a miss.
+ENTRY_FORMAT = 2
+_state = {"directory": None}
+_ADDRESS = re.compile(r" at 0x[0-9a-fA-F]+")
+
+
+def enable(directory):
+    """Keep exported programs in ``directory`` (a path; None: off). MAGDESIGN_NO_EXPORT set
+    to anything but "" or "0" keeps it off, and so does a Python without the flatbuffers
+    package."""
+    if os.environ.get("MAGDESIGN_NO_EXPORT", "") not in ("", "0") or importlib.util.find_spec("flatbuffers") is None:
+        directory = None  # turned off, or no flatbuffers, which jax.export's serialization needs
+    _state["directory"] = None if directory is None else Path(directory)
+
+
+def directory():
+    """The folder of the exported programs, or None when they are off."""
+    return _state["directory"]
+
+
+@functools.cache
+def versions() -> str:
+    """The versions an entry is valid for: jax, jaxlib, magdesign with a digest of its
+    source files' names, sizes and modification times (an edit makes new entries; so does
+    a fresh copy of the same files), and the entry format."""
+    package = Path(__file__).parent
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        stat = path.stat()
+        digest.update(f"{path.relative_to(package)} {stat.st_size} {stat.st_mtime_ns}\n".encode())
+    return (
+        f"jax {jax.__version__}, jaxlib {jaxlib.__version__}, "
+        f"magdesign {magdesign.__version__} {digest.hexdigest()[:16]}, format {ENTRY_FORMAT}"
+    )
+
+
+def jit(fn, name: str, structure: str, *, compiler_options=None, batched=()):
+    """``jax.jit(fn)`` for a ``fn`` of arrays (pytrees of arrays in, pytree of arrays
+    out) whose trace depends on nothing but ``structure`` (a text) and its arguments'
+    shapes and dtypes: the trace of each set of shapes is read from the kept entry where
+    there is one, else made and kept (see the module's docstring).
+
+    Args:
+        fn: the function.
+        name: a short name for the entry's file ("solve", "outputs").
+        structure: a text naming everything else that ``fn``'s trace depends on.
+        compiler_options: XLA options of the compiled program (as ``jax.jit``'s).
+        batched: the positions of the arguments whose leading axis is a batch: an entry
+            is kept for any length of it (shape polymorphism), where export allows.
+
+    Returns:
+        The jitted function (``lower`` and ``compile`` as ``jax.jit``'s).
+    """
+
+    def body(*args):
+        leaves, in_tree = jax.tree.flatten(args)
+        first = {id(leaf) for i in batched for leaf in jax.tree.leaves(args[i])}
+        # the error mode is read when traced (magdesign._tracing.checked)
+        traced = f"{structure}\nerrors as NaN: {_tracing._errors['as_nan']}"
+        kept = _kept(fn, name, traced, in_tree, tuple(_aval(leaf, id(leaf) in first) for leaf in leaves))
+        if kept is None or kept is _UNEXPORTABLE:
+            return fn(*args)
+        exported, out_tree = kept
+        return jax.tree.unflatten(out_tree, exported.call(*leaves))
+
+    body.__name__ = body.__qualname__ = getattr(fn, "__name__", "body")  # the compiled program's name
+    return jax.jit(body, compiler_options=compiler_options or {})
+
+
+def filter_jit(fn, name: str):
+    """``equinox.filter_jit(fn)`` (array leaves of the arguments traced, every other leaf
+    static), each structure of the arguments a :func:`jit` program keyed by the text of
+    its tree structure and static leaves. PRNG keys travel as their key data."""
+    plain = eqx.filter_jit(fn)
+    programs = {}
+
+    @functools.wraps(fn)
+    def call(*args, **kwargs):
+        leaves, treedef = jax.tree.flatten((args, kwargs))
+        if directory() is None or any(isinstance(leaf, jax.core.Tracer) for leaf in leaves):
+            return plain(*args, **kwargs)  # off, or inside another program's trace
+        is_array = tuple(eqx.is_array(leaf) for leaf in leaves)
+        keys = tuple(
+            jax.random.key_impl(leaf) if array and jax.dtypes.issubdtype(leaf.dtype, jax.dtypes.prng_key) else None
+            for array, leaf in zip(is_array, leaves)
+        )
+        static = tuple(None if array else leaf for array, leaf in zip(is_array, leaves))
+        structure = (treedef, is_array, static, keys)
+        if structure not in programs:
+
+            def joined(*arrays):
+                given = iter(arrays)
+                leaves = [
+                    (next(given) if impl is None else jax.random.wrap_key_data(next(given), impl=impl))
+                    if array
+                    else leaf
+                    for array, leaf, impl in zip(is_array, static, keys)
+                ]
+                inner_args, inner_kwargs = jax.tree.unflatten(treedef, leaves)
+                return fn(*inner_args, **inner_kwargs)
+
+            programs[structure] = jit(joined, name, repr(structure))
+        arrays = [
+            leaf if impl is None else jax.random.key_data(leaf)
+            for array, leaf, impl in zip(is_array, leaves, keys)
+            if array
+        ]
+        return programs[structure](*arrays)
+
+    return call
+
+
+def _aval(leaf, batch):
+    """(shape, dtype name) of an argument leaf, the leading axis "batch" where it is one."""
+    shape = tuple(np.shape(leaf))
+    return (("batch", *shape[1:]) if batch and shape else shape), str(leaf.dtype)
+
+
+_UNEXPORTABLE = (None, None)  # an entry that says export failed
+_KEPT = {}  # (folder, name, structure, in_tree, avals) -> (Exported, out_tree) or None
+
+
+def _kept(fn, name, structure, in_tree, avals):
+    """(Exported, out_tree) of ``fn`` at ``avals``, read from disk or exported and kept;
+    None when exporting is off, the structure has no stable text, or export fails."""
+    folder = directory()
+    if folder is None or _ADDRESS.search(structure) or _ADDRESS.search(str(in_tree)) or jax.device_count() > 1:
+        return None  # off, no stable text, or devices that an entry for one device does not fit
+    memo = (folder, name, structure, in_tree, avals)
+    if memo not in _KEPT:
+        text = f"{name}\n{structure}\n{in_tree}\n{avals}\n{versions()}"
+        path = folder / f"{name}-{hashlib.sha256(text.encode()).hexdigest()[:32]}.jaxexport"
+        _KEPT[memo] = _read(path, text) or _export(fn, in_tree, avals, path, text)
+    return _KEPT[memo]
+
+
+def _read(path, text):
+    """The entry at ``path`` for ``text``, or None where it is missing, unreadable or for
+    another text (other versions, another structure)."""
+    try:
+        entry = pickle.loads(path.read_bytes())
+        if entry["text"] != text:
+            return None
+        if entry["exported"] is None:
+            return _UNEXPORTABLE
+        _lapack_ready()
+        return jax.export.deserialize(bytearray(entry["exported"])), jax.tree.structure(pickle.loads(entry["out_tree"]))
+    except Exception:  # any damage to the file is a miss: the entry is made again
+        return None
+
+
+@functools.cache
+def _lapack_ready():
+    """Set up jaxlib's LAPACK kernels, as lowering a LAPACK call does: a program read back
+    from disk is never lowered, and its LAPACK calls would run unset kernels (a crash)."""
+    jax.jit(jnp.linalg.eigh).lower(np.eye(2))
+
+
+def _export(fn, in_tree, avals, path, text):
+    """Export ``fn`` at ``avals`` (a batch axis symbolic), write the entry to ``path`` and
+    return it read back (the program that later processes read, so that they find the same
+    compiled program in the compilation cache); _UNEXPORTABLE, also written, where export
+    fails."""
+    out_trees = []
+
+    def flat(*leaves):
+        out = fn(*jax.tree.unflatten(in_tree, leaves))
+        out_leaves, out_tree = jax.tree.flatten(out)
+        out_trees.append(out_tree)
+        return out_leaves
+
+    (size,) = jax.export.symbolic_shape("batch") if any("batch" in shape for shape, _ in avals) else (None,)
+    shapes = [
+        jax.ShapeDtypeStruct(tuple(size if axis == "batch" else axis for axis in shape), dtype)
+        for shape, dtype in avals
+    ]
+    try:
+        serialized = jax.export.export(jax.jit(flat))(*shapes).serialize()
+    except Exception:  # not exportable (a host callback, a batch that export cannot keep symbolic)
+        _keep(path, {"text": text, "exported": None})  # later processes trace it without trying
+        return _UNEXPORTABLE
+    # the output's tree as an instance with 0 for each leaf: a pickled tree structure of
+    # equinox modules does not unflatten in another process
+    out_tree = pickle.dumps(jax.tree.unflatten(out_trees[-1], [0] * out_trees[-1].num_leaves))
+    _keep(path, {"text": text, "exported": bytes(serialized), "out_tree": out_tree})
+    return jax.export.deserialize(serialized), jax.tree.structure(pickle.loads(out_tree))
+
+
+def _keep(path, entry):
+    """Write ``entry`` to ``path`` whole or not at all (another process may read it); a
+    folder that cannot be written keeps nothing."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".part")
+        try:
+            with os.fdopen(handle, "wb") as file:
+                file.write(pickle.dumps(entry))
+            os.replace(temporary, path)
+        finally:
+            Path(temporary).unlink(missing_ok=True)
+    except OSError:
+        pass
