@@ -50,7 +50,8 @@ with the periods P dx, P dy: each period spans the layer and SPECTRAL_PADDING th
 beyond it, where a bonded layer's displacement has fallen below about 1e-3 of its peak (it
 decays like e^(-0.85 r / h) at nu = 0.49). Sampled at the cells only, the lattice folds onto
 the cell grid's own (modes m and m + P give the same values there), so a fine lattice costs
-one pass over its modes and an FFT of P_x x P_y. At a level d below the top the kernels
+one pass over half its modes (the field is real: the modes -m are the conjugates of m) and
+an FFT of P_x x P_y. At a level d below the top the kernels
 decay like e^(-k d): its lattice reaches k d >= SPECTRAL_REACH along each axis, a whole
 multiple r of the cell grid's own reach pi / dx (:func:`spectral_grid`; with 7, the sum
 matches the Hankel quadrature to about 1e-4 of the peak displacement and 3e-4 of the peak
@@ -456,7 +457,15 @@ def layer_displacement_grid(
     fx, fy = jnp.asarray(load.shear_force, dtype=float)
     levels = []
     for level, (rx, ry) in enumerate(grid.refine):
-        mx, my = np.arange(rx * px) - rx * px // 2, np.arange(ry * py) - ry * py // 2
+        # the lattice |m_x| <= (r_x P_x - 1) / 2 (an even count's unpaired -M dropped) by
+        # 0 <= m_y <= (r_y P_y - 1) / 2: the field is real, so the modes -m are the conjugates
+        # of m, and the half m_y > 0 counts twice in the real part of the sum. Along y it is
+        # padded with weightless modes to whole periods, for the fold below.
+        mx, my = np.arange(rx * px) - rx * px // 2, np.arange(-(-ry // 2) * py)
+        weights = (
+            np.where(my == 0, 1.0, np.where(my <= (ry * py - 1) // 2, 2.0, 0.0))[None, :]
+            * (np.abs(mx) <= (rx * px - 1) // 2)[:, None]
+        )
         kx1, ky1 = 2.0 * jnp.pi * mx / (px * side[0]), 2.0 * jnp.pi * my / (py * side[1])
         kx, ky = kx1[:, None], ky1[None, :]
         # the k = 0 mode is the limit k h -> 0, taken at k h = ZERO_MODE_KH; its direction is x
@@ -477,13 +486,10 @@ def layer_displacement_grid(
         ux, uy, uz = ex * u_l - ey * u_t, ey * u_l + ex * u_t, -1j * W_L * t_l + W_z * t_z
         dux, duy = ex * du_l - ey * du_t, ey * du_l + ex * du_t
         curl = (1j * ky * uz - duy, dux - 1j * kx * uz, 1j * (kx * uy - ky * ux))
-        # an even count leaves the mode -M without its partner +M: dropped, so that the lattice
-        # is symmetric and a symmetric load gives a symmetric field
-        paired = ((mx != -rx * px / 2)[:, None] & (my != -ry * py / 2)[None, :]).astype(float)
-        spectrum = jnp.stack([ux, uy, uz, *curl]) * paired
+        spectrum = jnp.stack([ux, uy, uz, *curl]) * weights
         # sampled at the cells only, the lattice folds onto the cell grid's own (period P)
-        folded = spectrum.reshape(6, rx, px, ry, py).sum(axis=(1, 3))
-        folded = jnp.roll(folded, (mx[0], my[0]), axis=(1, 2))
+        folded = spectrum.reshape(6, rx, px, -(-ry // 2), py).sum(axis=(1, 3))
+        folded = jnp.roll(folded, mx[0], axis=1)
         levels.append(jnp.fft.ifft2(folded).real[:, :nx, :ny])
     fields = jnp.stack(levels, axis=-1)  # (6, n_x, n_y, n_z)
     return jnp.moveaxis(fields[:3], 0, -1), 0.5 * jnp.moveaxis(fields[3:], 0, -1)
