@@ -11,7 +11,9 @@ Prints
 3. the default design (examples/dome_hall.toml) at each dome level: first call (compile
    included) and warm solve;
 4. one factor and solve of the Newton tangent: the block tridiagonal factor
-   (magdesign.mechanics._blocks) against a dense Cholesky of the same matrix, per mesh.
+   (magdesign.mechanics._blocks) against a dense Cholesky of the same matrix, per mesh;
+5. a skin layer's displacement and rotation on its cells (layer_displacement_grid), one
+   load on a 20 x 20 x 2 mm layer, and its Jacobian along the load (x, y, Fn, Fx, Fy).
 Timings are the best of REPEATS (first calls and the reference mesh: one each).
 """
 
@@ -27,6 +29,7 @@ import magdesign  # noqa: F401  (float64)
 from magdesign.design import solve
 from magdesign.mechanics import MooneyRivlin, _axisymmetric, _blocks, dome_compliance, dome_curve
 from magdesign.mechanics.dome import DEFAULT_MESH
+from magdesign.mechanics.skin_layer import ElasticLayer, SurfaceLoad, layer_displacement_grid, spectral_grid
 from magdesign.spec.design import default_spec, problem_from_spec
 from magdesign.units import mm
 
@@ -164,8 +167,27 @@ def factor_costs(loops=50):
         )
 
 
+def skin_grid_costs():
+    print("\n5. a skin layer on its cells, one Hertz load (20 x 20 x 2 mm, mu 20 kPa, nu 0.49)")
+    print(f"   {'cells':<12}{'first (s)':>11}{'warm (s)':>10}{'jacobian first':>16}{'warm (s)':>10}")
+    size = jnp.array([20 * mm, 20 * mm])
+    for cells in ((16, 16, 8), (32, 32, 16)):
+        grid = spectral_grid(size=size, thickness=2 * mm, cells=cells)
+
+        def fields(state, layer_values, cells=cells, grid=grid):
+            layer = ElasticLayer(*layer_values)
+            load = SurfaceLoad(centre=state[:2], radius=1.7 * mm, normal_force=state[2], shear_force=state[3:])
+            return layer_displacement_grid(layer=layer, load=load, size=size, cells=cells, grid=grid)
+
+        state, layer_values = jnp.array([1 * mm, -2 * mm, 0.3, 0.1, 0.05]), jnp.array([2 * mm, 20e3, 0.49])
+        first, warm, _ = _first_and_best(jax.jit(fields), state, layer_values)
+        jac_first, jac_warm, _ = _first_and_best(jax.jit(jax.jacfwd(fields)), state, layer_values)
+        print(f"   {str(cells):<12}{first:>11.3g}{warm:>10.3g}{jac_first:>16.3g}{jac_warm:>10.3g}")
+
+
 if __name__ == "__main__":
     mesh_convergence()
     call_costs()
     default_design()
     factor_costs()
+    skin_grid_costs()

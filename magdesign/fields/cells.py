@@ -132,4 +132,26 @@ def moved_cells(
         ],
         axis=-1,
     )
-    return centres + u, rotate_by_vector(polarization, 0.5 * curl)
+    return carried_cells(centres, polarization, u, 0.5 * curl)
+
+
+def carried_cells(
+    centres: Float[ArrayLike, "n 3"],
+    polarization: Float[ArrayLike, "n 3"],
+    displacement: Float[ArrayLike, "n 3"],
+    rotation: Float[ArrayLike, "n 3"],
+) -> tuple[Float[Array, "n 3"], Float[Array, "n 3"]]:
+    """The cells carried by given displacements and rotations at their centres (module
+    docstring): what :func:`moved_cells` does with a displacement field's values.
+
+    Args:
+        centres: the cells' centres (m), shape (N, 3), undeformed.
+        polarization: their polarization J (T), shape (N, 3), undeformed.
+        displacement: u at each centre (m), shape (N, 3).
+        rotation: the rotation vector curl(u) / 2 at each centre (rad), shape (N, 3).
+
+    Returns:
+        (moved centres c + u (m, (N, 3)), polarization turned by the rotation (T, (N, 3))).
+    """
+    centres, polarization = float_array(centres), float_array(polarization)
+    return centres + float_array(displacement), rotate_by_vector(polarization, float_array(rotation))

@@ -17,7 +17,12 @@ force's radius (the displacement, proportional to the forces on a given patch, i
 anyway). The layer's
 displacement field (linear elasticity: displacements small against h) moves the cells and
 turns their polarization with the material's rotation, as rigid particles turn
-(:func:`magdesign.fields.cells.moved_cells`); the chips read the moved cells' field.
+(:func:`magdesign.fields.cells.carried_cells`); the chips read the moved cells' field. The
+displacement and rotation at the cells' centres come from the layer's Fourier sums on the
+cell grid (:func:`magdesign.mechanics.skin_layer.layer_displacement_grid`, about 1e-4 of the
+peak displacement from the Hankel quadrature's values), on the lattice ``spectral`` (static:
+:func:`~magdesign.mechanics.skin_layer.spectral_grid` of the size and thickness the scene is
+built with, unless given).
 
 The cells move rigidly, so a cell as thick as the layer moves its bonded bottom face with
 its centre: the field's change converges as the cells thin. Under a centred press, at the
@@ -54,8 +59,14 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from magdesign.fields.cells import cells_field, layer_cells, moved_cells
-from magdesign.mechanics.skin_layer import ElasticLayer, SurfaceLoad, layer_displacement
+from magdesign.fields.cells import carried_cells, cells_field, layer_cells
+from magdesign.mechanics.skin_layer import (
+    ElasticLayer,
+    SpectralGrid,
+    SurfaceLoad,
+    layer_displacement_grid,
+    spectral_grid,
+)
 from magdesign.scene.core import AbstractScene
 from magdesign.scene.effects import AbstractEffect, judged_saturation
 from magdesign.scene.loads import Loads
@@ -74,7 +85,9 @@ class SkinScene(AbstractScene):
     """A magnetic skin over a chip array (module docstring); lengths (m), J0 (T), moduli (Pa).
 
     ``direction`` (static): the polarization's unit vector; ``cells`` (static): the layer's
-    cells (n_x, n_y, n_z); ``map_grid`` (static): the outputs' contact positions (n_x, n_y).
+    cells (n_x, n_y, n_z); ``map_grid`` (static): the outputs' contact positions (n_x, n_y);
+    ``spectral`` (static): the cells' wavevector lattice, by default chosen from the concrete
+    size and thickness at construction (module docstring).
     """
 
     thickness: Float[Array, ""]
@@ -91,6 +104,12 @@ class SkinScene(AbstractScene):
     direction: tuple[float, float, float] = eqx.field(static=True, default=(0.0, 0.0, 1.0))
     cells: tuple[int, int, int] = eqx.field(static=True, default=(16, 16, 8))
     map_grid: tuple[int, int] = eqx.field(static=True, default=(5, 5))
+    spectral: SpectralGrid | None = eqx.field(static=True, default=None)
+
+    def __post_init__(self):
+        # the cells' wavevector lattice, from the layer's values at construction (module docstring)
+        if self.spectral is None:
+            self.spectral = spectral_grid(size=self.size, thickness=self.thickness, cells=self.cells)
 
     SOURCE_KEY: ClassVar = "magnet.polarization"
     reading_labels: ClassVar = ("Bx", "By", "Bz")
@@ -147,8 +166,10 @@ class SkinScene(AbstractScene):
             normal_force=displacement[2],
             shear_force=displacement[3:5],
         )
-        layer = self.layer()
-        moved, turned = moved_cells(centres, polarization, lambda p: layer_displacement(p, layer=layer, load=load))
+        u, rotation = layer_displacement_grid(
+            layer=self.layer(), load=load, size=self.size, cells=self.cells, grid=self.spectral
+        )
+        moved, turned = carried_cells(centres, polarization, u.reshape(-1, 3), rotation.reshape(-1, 3))
         return cells_field(points, centres=moved, dimension=dimension, polarization=turned)
 
     def transduce(self, field):

@@ -18,13 +18,16 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spsl
 import scipy.special as sp
 
+from magdesign.fields.cells import layer_cells
 from magdesign.mechanics.skin_layer import (
     ElasticLayer,
     SurfaceLoad,
     bessel_scaled,
     hertz_contact,
     layer_displacement,
+    layer_displacement_grid,
     load_transform,
+    spectral_grid,
     thin_layer_contact,
 )
 
@@ -449,3 +452,81 @@ def test_construction_and_validation():
         _load("parabolic", fn=1.0)
     with pytest.raises(ValueError, match="radius"):
         _load("hertz", fn=1.0, radius=0.0)
+
+
+def _curl_by_differences(points, layer, load, step=1e-6):
+    """curl(u) / 2 of the Hankel quadrature's field by central differences of step (m)."""
+    columns = []
+    for axis in range(3):
+        shift = np.zeros(3)
+        shift[axis] = step
+        plus = np.asarray(layer_displacement(points + shift, layer=layer, load=load))
+        minus = np.asarray(layer_displacement(points - shift, layer=layer, load=load))
+        columns.append((plus - minus) / (2 * step))
+    g = np.stack(columns, axis=-1)  # (N, component, derivative)
+    return 0.5 * np.stack([g[:, 2, 1] - g[:, 1, 2], g[:, 0, 2] - g[:, 2, 0], g[:, 1, 0] - g[:, 0, 1]], axis=-1)
+
+
+@pytest.mark.parametrize(
+    ("radius", "nu", "profile"),
+    [(1.7e-3, 0.49, "hertz"), (0.5e-3, 0.49, "hertz"), (1.0e-3, 0.3, "uniform")],
+)
+def test_grid_evaluation_matches_the_hankel_quadrature(radius, nu, profile):
+    """The cells' Fourier sums (layer_displacement_grid) against the Hankel quadrature
+    (layer_displacement, itself checked above against half-space and finite-element
+    solutions) at every level of a 2 mm layer cut 16 x 16 x 8 (h / a = 1.2, 4 and 2), an
+    off-centre load with shear along both axes; the rotation against central differences of
+    the quadrature's displacement. Tolerance 1e-3 of the peak: the lattice's reach
+    (SPECTRAL_REACH) and period (SPECTRAL_PADDING) leave about 1e-4 of the displacement's peak
+    and 5e-4 of the rotation's."""
+    size, h, cells = np.array([20e-3, 20e-3]), 2e-3, (16, 16, 8)
+    layer = ElasticLayer(thickness=h, shear_modulus=MU, poisson_ratio=nu)
+    load = _load(profile, fn=0.3, ft=(0.1, 0.05), centre=(1.3e-3, -2.1e-3), radius=radius)
+    grid = spectral_grid(size=size, thickness=h, cells=cells)
+    u, rotation = layer_displacement_grid(layer=layer, load=load, size=size, cells=cells, grid=grid)
+    assert u.shape == rotation.shape == (16, 16, 8, 3)
+    centres, _ = layer_cells(size=size, thickness=h, cells=cells)
+    # every third column of cells, all levels: 6 x 6 x 8 points, near the load and far
+    pick = (slice(None, None, 3), slice(None, None, 3))
+    points = np.asarray(centres).reshape(16, 16, 8, 3)[pick].reshape(-1, 3)
+    expected = np.asarray(layer_displacement(points, layer=layer, load=load))
+    turned = _curl_by_differences(points, layer, load)
+    got_u, got_rotation = np.asarray(u)[pick].reshape(-1, 3), np.asarray(rotation)[pick].reshape(-1, 3)
+    np.testing.assert_allclose(got_u, expected, atol=1e-3 * np.max(np.abs(expected)))
+    np.testing.assert_allclose(got_rotation, turned, atol=1e-3 * np.max(np.abs(turned)))
+
+
+def test_grid_evaluation_differentiates():
+    """jax's derivatives of the grid's displacement and rotation along the load's position,
+    forces and radius and the layer's thickness, modulus and Poisson ratio, against central
+    differences of the same function (a coarse 8 x 8 x 2 layer)."""
+    size, cells = jnp.array([16e-3, 12e-3]), (8, 6, 2)
+    grid = spectral_grid(size=size, thickness=2e-3, cells=cells)
+
+    @jax.jit
+    def fields(q):
+        layer = ElasticLayer(thickness=q[6], shear_modulus=q[7], poisson_ratio=q[8])
+        load = SurfaceLoad(centre=q[:2], radius=q[5], normal_force=q[2], shear_force=q[3:5])
+        u, rotation = layer_displacement_grid(layer=layer, load=load, size=size, cells=cells, grid=grid)
+        return jnp.concatenate([u.ravel(), rotation.ravel()])
+
+    q = np.array([1e-3, -0.5e-3, 0.5, 0.2, -0.1, 1.5e-3, 2e-3, MU, 0.45])
+    steps = np.abs(q) * 1e-5
+    jacobian = np.asarray(jax.jit(jax.jacfwd(fields))(jnp.asarray(q)))
+    for i, step in enumerate(steps):
+        e = np.zeros_like(q)
+        e[i] = step
+        difference = (np.asarray(fields(q + e)) - np.asarray(fields(q - e))) / (2 * step)
+        np.testing.assert_allclose(jacobian[:, i], difference, rtol=1e-5, atol=1e-6 * np.max(np.abs(difference)))
+
+
+def test_spectral_grid_follows_the_layer():
+    """Periods span the layer plus SPECTRAL_PADDING thicknesses; the lattice of each level,
+    its centre d below the top, reaches k d >= SPECTRAL_REACH (by hand for 20 x 10 mm,
+    h = 2 mm, 16 x 8 x 4 cells: sides 1.25 mm, levels 0.25 to 1.75 mm deep)."""
+    grid = spectral_grid(size=(20e-3, 10e-3), thickness=2e-3, cells=(16, 8, 4))
+    assert grid.periods == (16 + 16, 8 + 16)
+    # r = ceil(7 * 1.25 / (pi d)) at d = 1.75, 1.25, 0.75, 0.25 mm, bottom to top
+    assert grid.refine == ((2, 2), (3, 3), (4, 4), (12, 12))
+    with pytest.raises(ValueError, match="concrete"):
+        jax.jit(lambda h: spectral_grid(size=(20e-3, 10e-3), thickness=h, cells=(16, 8, 4)).periods[0])(2e-3)
