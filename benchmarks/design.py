@@ -90,7 +90,7 @@ def timed_solves(problem, repeats):
 # command's persistent cache turned on. Prints the first call's seconds.
 FRESH_PROCESS = """
 import time
-from magdesign.cli import use_compilation_cache
+from magdesign._cache import use_compilation_cache
 from magdesign.design import solve
 from magdesign.spec.design import default_spec, problem_from_spec
 from magdesign.spec.levels import levels_text, solve_to_accuracy

@@ -12,7 +12,7 @@ arguments' shapes and dtypes (the caller's ``structure``: the problem's tree str
 with its static fields), by those shapes and dtypes, and by the versions of jax, jaxlib and
 magdesign (with a digest of its source files' names, sizes and times, so that an edited
 checkout does not reuse a stale program). The folder is named by the CPU (see
-``magdesign.cli.cache_directory``).
+``magdesign._cache.cache_directory``).
 A structure whose text holds an object's address ("at 0x...", which differs from process
 to process and so names no structure) is not kept. An entry that cannot be read, was
 written by other versions or for another structure is ignored and written again. Where
@@ -20,7 +20,7 @@ exporting fails (a program with a host callback), the program is traced and jitt
 usual.
 
 Off unless :func:`enable` names a folder (the command does for its run, see
-``magdesign.cli.export_directory``); MAGDESIGN_NO_EXPORT=1 keeps it off.
+``magdesign._cache.export_directory``); MAGDESIGN_NO_EXPORT=1 keeps it off.
 """
 
 import functools

@@ -4,7 +4,7 @@ from pathlib import Path
 import jax
 import pytest
 
-from magdesign.cli import use_compilation_cache
+from magdesign._cache import use_compilation_cache
 
 # One persistent compilation cache for the tests, in the repository's .pytest_cache (never
 # the user's): the xdist workers, each module after clear_caches below and the commands the

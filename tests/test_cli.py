@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from magdesign.cli import cpu_tag, main
+from magdesign._cache import cpu_tag
+from magdesign.cli import main
 
 EXAMPLES = Path(__file__).parents[1] / "examples"
 
