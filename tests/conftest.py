@@ -23,6 +23,29 @@ def _drop_compiled_programs_after_each_module():
     jax.clear_caches()
 
 
+def mapped_regions():
+    """(regions, limit): how many memory mappings this process holds and the most that
+    Linux allows one process (vm.max_map_count); None where /proc cannot tell."""
+    try:
+        with open("/proc/sys/vm/max_map_count") as limit, open("/proc/self/maps", "rb") as maps:
+            return sum(1 for _ in maps), int(limit.read())
+    except (OSError, ValueError):
+        return None
+
+
+@pytest.fixture(autouse=True)
+def _drop_compiled_programs_before_the_mapping_limit():
+    """Free the compiled programs once they hold half the mappings a process may have.
+    XLA:CPU's fusion emitters (jaxlib 0.12's only code generator) load each kernel as an
+    object of its own, three mappings apiece: one design solve adds about 1,300, so a
+    module of 50 solves reaches Linux's default limit (65,530), where XLA's next program
+    fails to load ("Failed to materialize symbols")."""
+    yield
+    regions = mapped_regions()
+    if regions is not None and regions[0] > regions[1] // 2:
+        jax.clear_caches()
+
+
 # Whole modules in the slow tier (`make test-all`): each runs studies, builds the site's
 # code blocks or installs the wheel, minutes apiece. Single slow tests carry the marker.
 SLOW_MODULES = ("tests/studies/", "tests/test_docs.py", "tests/test_installed.py")
