@@ -176,10 +176,13 @@ class SkinScene(AbstractScene):
         return field
 
     def map_points(self) -> Float[Array, "m 2"]:
-        """The outputs' contact positions (M, 2) (m): a ``map_grid`` over the chips' bounding box."""
+        """The outputs' contact positions (M, 2) (m): a ``map_grid`` over the chips' bounding
+        box, corners included; along an axis of one point, the box's middle."""
         low, high = jnp.min(self.chips, axis=0), jnp.max(self.chips, axis=0)
-        xs = jnp.linspace(low[0], high[0], self.map_grid[0])
-        ys = jnp.linspace(low[1], high[1], self.map_grid[1])
+        xs, ys = (
+            jnp.linspace(low[i], high[i], n) if n > 1 else ((low[i] + high[i]) / 2)[None]
+            for i, n in enumerate(self.map_grid)
+        )
         xx, yy = jnp.meshgrid(xs, ys, indexing="ij")
         return jnp.stack([xx.ravel(), yy.ravel()], axis=-1)
 

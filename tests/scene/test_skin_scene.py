@@ -87,3 +87,13 @@ def test_resolution_outputs_against_differences_and_numpys_fisher_inverse():
     np.testing.assert_allclose(got["force_resolution_shear"], max(shear), rtol=1e-4)
     np.testing.assert_allclose(got["background_force_error"], max(background), rtol=1e-4)
     assert 0.0 <= float(got["crosstalk"]) <= 1.0 and 0.0 < float(got["saturation_ratio"]) < 1.0
+
+
+def test_the_map_spans_the_chips_box_and_one_point_is_its_middle():
+    low, high = np.min(CHIPS, axis=0), np.max(CHIPS, axis=0)
+    corners = np.asarray(skin(map_grid=(2, 3)).map_points())
+    assert corners.shape == (6, 2)
+    np.testing.assert_allclose(corners.min(axis=0), low)
+    np.testing.assert_allclose(corners.max(axis=0), high)
+    np.testing.assert_allclose(np.asarray(skin(map_grid=(1, 1)).map_points()), [(low + high) / 2])
+    np.testing.assert_allclose(np.asarray(skin(map_grid=(1, 2)).map_points())[:, 0], (low[0] + high[0]) / 2)
