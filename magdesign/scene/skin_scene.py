@@ -67,7 +67,7 @@ from magdesign.mechanics.skin_layer import (
     layer_displacement_grid,
     spectral_grid,
 )
-from magdesign.scene.core import AbstractScene
+from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect, judged_saturation
 from magdesign.scene.loads import Loads
 from magdesign.transducers import Hall3D, cramer_rao
@@ -187,10 +187,10 @@ class SkinScene(AbstractScene):
         return jnp.stack([xx.ravel(), yy.ravel()], axis=-1)
 
     def readings_at(self, state: Float[Array, "5"]) -> Float[Array, "s 3"]:
-        """Every chip's field (T, chip frame, no effects), (S, 3), under one load state
-        (x, y, Fn, F_x, F_y)."""
-        positions, _ = self.sensor_poses()
-        return self.source_field(positions, state)
+        """Every chip's field (T, chip frame), (S, 3), under one load state (x, y, Fn, F_x,
+        F_y): the scene's static chain (its chips placed and tilted, the source's and the
+        field's effects) up to the readings' own effects, whose noise the bounds take."""
+        return chain(self, state[None], without=STATIC_WITHOUT).chip_field[0]
 
     def resolution_at(self, state: Float[Array, "5"]):
         """(Cramer-Rao :class:`~magdesign.inverse.Bound` of the load state from all readings,

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from magdesign.scene.core import outputs, simulate
+from magdesign.scene.effects import Placement
 from magdesign.scene.loads import Loads
 from magdesign.scene.skin_scene import BACKGROUND_REFERENCE, SkinScene
 from magdesign.transducers import mlx90393
@@ -97,3 +98,16 @@ def test_the_map_spans_the_chips_box_and_one_point_is_its_middle():
     np.testing.assert_allclose(corners.max(axis=0), high)
     np.testing.assert_allclose(np.asarray(skin(map_grid=(1, 1)).map_points()), [(low + high) / 2])
     np.testing.assert_allclose(np.asarray(skin(map_grid=(1, 2)).map_points())[:, 0], (low[0] + high[0]) / 2)
+
+
+def test_the_bounds_read_the_placed_chips():
+    """The readings whose Jacobian the bounds take come from the placed chips: chips lifted
+    by a placement offset read what chips set that much less deep read (placement's first
+    order is not zero in a tolerance analysis)."""
+    lift = 0.2 * mm
+    state = jnp.array([1 * mm, 0.5 * mm, 0.05, 0.01, 0.0])
+    placed = skin(cells=(4, 4, 2), effects=(Placement(jnp.array([0.0, 0.0, lift])),))
+    shallower = skin(cells=(4, 4, 2), depth=jnp.asarray(1 * mm - lift))
+    nominal = skin(cells=(4, 4, 2))
+    np.testing.assert_allclose(placed.readings_at(state), shallower.readings_at(state), rtol=1e-12, atol=1e-15)
+    assert np.max(np.abs(placed.readings_at(state) - nominal.readings_at(state))) > 1e-6

@@ -198,7 +198,8 @@ def test_the_simulation_table_shows_a_skins_contact_point_in_line_with_its_readi
 
 def test_at_rest_the_specs_chips_read_magpylibs_block():
     """The spec's layer (sides, thickness above z = 0, a tilted polarisation) and chips (x, y,
-    depth below z = 0) against magpylib's cuboid of the same polarisation, unloaded."""
+    depth below z = 0) against magpylib's cuboid of the same polarisation, unloaded, plus the
+    example's background field (50 uT along z), which the chips read too."""
 
     def edit(spec):
         spec["magnet"]["direction"] = [1, 0, 1]
@@ -208,7 +209,8 @@ def test_at_rest_the_specs_chips_read_magpylibs_block():
     polarization = 0.02 * np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0)
     block = magpylib.magnet.Cuboid(polarization=polarization, dimension=(0.03, 0.03, 0.002), position=(0, 0, 0.001))
     chips = [[0.0, 0.0, -1e-3], [0.01, 0.0, -1e-3], [-0.01, 0.0, -1e-3], [0.0, 0.01, -1e-3], [0.0, -0.01, -1e-3]]
-    np.testing.assert_allclose(got, block.getB(np.array(chips)), rtol=1e-9, atol=1e-15)
+    background = np.array([0.0, 0.0, 50e-6])
+    np.testing.assert_allclose(got, block.getB(np.array(chips)) + background, rtol=1e-9, atol=1e-15)
 
 
 def test_every_effect_traces_through_the_skins_chain():
