@@ -310,7 +310,7 @@ def run_solve(args):
         print(_designed(spec, args.spec))
         for index, (name, _, answer) in enumerate(answers):
             role = "the answer" if index == len(answers) - 1 else "first answer, confirmed below"
-            print(f"{name} ({role}):")
+            print(f"{name} ({role}):" if name else f"{role}:")  # a scene without levels names none
             print(answer.table())
             print(
                 f"   that solve took {answer.seconds:.3g} s (first call: tracing, and compiling or loading from the cache, included)\n"

@@ -128,8 +128,8 @@ def test_missing_spec_file_exits_2(capsys):
     assert "no/such/spec.toml" in capsys.readouterr().err
 
 
-# Examples whose simulation takes minutes: the skin's outputs compile the Jacobian of every reading
-# through the layer's transforms.
+# Examples whose simulation compiles for half a minute and more: the skin's outputs take the
+# Jacobian of every reading through the layer's transforms.
 SLOW_EXAMPLES = ("skin.toml",)
 
 
