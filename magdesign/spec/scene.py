@@ -620,15 +620,17 @@ def check_contact_patch(scene, force):
 
 
 def _skin_chips(sensor):
-    """The skin's chips (S, 2) (m) and the key that placed them: sensor.chips, or sensor.grid at sensor.pitch."""
+    """(the skin's chips (S, 2) (m), None), or (a grid's unit offsets, its pitch (m): the
+    parameter sensor.pitch, which a design varies), and the key that placed them."""
     if sensor.has("grid") == sensor.has("chips"):
         raise SpecError(
             "sensor.chips: expected the chips' positions [[x, y], ...] or sensor.grid with sensor.pitch "
             f"({'both were' if sensor.has('grid') else 'neither was'} given)"
         )
     if sensor.has("grid"):
-        return np.asarray(grid_positions(_grid(sensor), sensor.quantity("pitch", "m")))[:, :2], "sensor.grid"
-    return np.asarray(sensor.points("chips", default=None, plane=True), dtype=float).reshape(-1, 2), "sensor.chips"
+        return np.asarray(grid_positions(_grid(sensor), 1.0))[:, :2], sensor.quantity("pitch", "m"), "sensor.grid"
+    chips = np.asarray(sensor.points("chips", default=None, plane=True), dtype=float).reshape(-1, 2)
+    return chips, None, "sensor.chips"
 
 
 def _skin_scene(spec, fidelity):
@@ -641,8 +643,6 @@ def _skin_scene(spec, fidelity):
     magnet.choice("shape", ("skin",))
     polarization = magnet.quantity("polarization", "T")
     direction = _direction(magnet)
-    cells = _counts(magnet, "cells", [16, 16, 8], "[along x, along y, through the thickness]")
-    magnet.done()
     mechanics = Table(spec, "mechanics")
     mechanics.choice("model", ("bonded_layer",))
     thickness = mechanics.quantity("thickness", "m")
@@ -650,13 +650,16 @@ def _skin_scene(spec, fidelity):
     shear_modulus = mechanics.quantity("shear_modulus", "Pa")
     poisson_ratio = mechanics.quantity("poisson_ratio", "1")
     mechanics.done()
+    cells = _counts(magnet, "cells", [16, 16, 8], "[along x, along y, through the thickness]")
+    magnet.done()
     indenter = Table(spec, "indenter")
     radius = indenter.quantity("radius", "m")
     indenter.done()
     sensor = Table(spec, "sensor")
     sensor.choice("model", ("hall3d",))
     hall = _hall(sensor)
-    chips, chips_key = _skin_chips(sensor)
+    offsets, pitch, chips_key = _skin_chips(sensor)
+    chips = offsets if pitch is None else offsets * pitch
     depth = sensor.quantity("depth", "m")
     map_grid = _counts(sensor, "map_grid", [5, 5], "[along x, along y]")
     sensor.done()
@@ -686,7 +689,8 @@ def _skin_scene(spec, fidelity):
         shear_modulus=jnp.asarray(shear_modulus),
         poisson_ratio=jnp.asarray(poisson_ratio),
         sphere_radius=jnp.asarray(radius),
-        chips=jnp.asarray(chips),
+        chips=jnp.asarray(offsets),
+        pitch=None if pitch is None else jnp.asarray(pitch),
         depth=jnp.asarray(depth),
         noise=jnp.broadcast_to(jnp.asarray(noise, dtype=float), (3,)),
         hall=hall,
@@ -717,7 +721,7 @@ def check_field_samples(scene, points):
     if isinstance(scene, FilmScene):
         sensors = int(np.prod(scene.grid))
     elif isinstance(scene, SkinScene):
-        sensors = int(scene.chips.shape[0])
+        sensors = len(scene.chips)
     else:
         sensors = int(np.shape(getattr(scene, "sensor_positions", np.zeros((1, 3))))[0])
     quadrature = max((effect.points for effect in scene.effects if effect.name == "area_averaging"), default=1)
