@@ -33,6 +33,17 @@ centre chip 1 mm below a 2 mm layer of 20 x 20 cells, the change was -246, 28, 1
 143 uT at n_z = 1, 2, 4, 8 and 16 cells through the thickness: the error falls as n_z^-2
 from n_z = 2 on (21 % at 4, 5 % at 8, 1.4 % at 16).
 
+An eFlesh-like skin (Pattabiraman et al., "eFlesh: highly customizable magnetic touch
+sensing using cut-cell microstructures", 2025: a printed soft lattice carrying small magnets
+over magnetometers) carries discrete magnets instead (``magnets``, :class:`SkinMagnets`):
+cuboids inside the layer, the lattice taken as the effective elastic layer (its homogenised
+moduli). The layer itself is then unmagnetised; each magnet carries the polarization J0 along
+its own direction, moves rigidly with the layer's displacement at its centre and turns with
+the material's rotation there (:func:`magdesign.fields.cells.moved_cells`, the displacement
+from the layer's Hankel quadrature, :func:`~magdesign.mechanics.skin_layer.layer_displacement`).
+A magnet stiffer than the lattice moves as a rigid body, as modelled; that it stiffens the
+lattice around it is left out (the effective layer's moduli are the lattice's alone).
+
 The mechanics' "displacement" of this scene is the load itself: each load point's
 (x, y, Fn, F_x, F_y) (m, m, N, N, N), which the scene's motion effects (a lag) act on.
 
@@ -62,11 +73,12 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from magdesign.fields.cells import carried_cells, cells_field, layer_cells
+from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
 from magdesign.mechanics.skin_layer import (
     ElasticLayer,
     SpectralGrid,
     SurfaceLoad,
+    layer_displacement,
     layer_displacement_grid,
     spectral_grid,
 )
@@ -92,6 +104,17 @@ def _chip_pairs(chips) -> tuple[tuple[Float[Array, ""], Float[Array, ""]], ...]:
     return tuple((row[0], row[1]) for row in rows)
 
 
+class SkinMagnets(eqx.Module):
+    """Discrete magnets embedded in a skin's layer (an eFlesh-like skin, module docstring):
+    M cuboids, each with its ``centres`` (x, y, z) at rest (m, scene frame, inside the layer),
+    ``sizes`` (its sides, m) and ``directions`` (its polarization's unit vector), (M, 3) each.
+    They carry the scene's ``polarization`` J0 (T)."""
+
+    centres: Float[Array, "m 3"]
+    sizes: Float[Array, "m 3"]
+    directions: Float[Array, "m 3"]
+
+
 class SkinScene(AbstractScene):
     """A magnetic skin over a chip array (module docstring); lengths (m), J0 (T), moduli (Pa).
 
@@ -101,7 +124,8 @@ class SkinScene(AbstractScene):
     size and thickness at construction (module docstring). ``chips``: each chip's (x, y)
     (m), given as an (S, 2) array and kept as pairs of scalars (each a design parameter); in
     units of ``pitch`` (m) where a pitch is given (a grid's unit offsets): the chips then sit
-    at ``chips * pitch`` (:meth:`chip_positions`).
+    at ``chips * pitch`` (:meth:`chip_positions`). ``magnets``: discrete magnets in an
+    unmagnetised layer (an eFlesh-like skin), or None for a uniformly magnetised layer.
     """
 
     thickness: Float[Array, ""]
@@ -120,6 +144,7 @@ class SkinScene(AbstractScene):
     map_grid: tuple[int, int] = eqx.field(static=True, default=(5, 5))
     spectral: SpectralGrid | None = eqx.field(static=True, default=None)
     pitch: Float[Array, ""] | None = None
+    magnets: SkinMagnets | None = None
 
     def __post_init__(self):
         # the cells' wavevector lattice, from the layer's values at construction (module docstring)
@@ -192,12 +217,21 @@ class SkinScene(AbstractScene):
             normal_force=displacement[2],
             shear_force=displacement[3:5],
         )
-        centres, dimension = layer_cells(size=self.size, thickness=self.thickness, cells=self.cells)
-        polarization = jnp.broadcast_to(self.polarization * jnp.asarray(self.direction), centres.shape)
-        u, rotation = layer_displacement_grid(
-            layer=self.layer(), load=load, size=self.size, cells=self.cells, grid=self.spectral
-        )
-        moved, turned = carried_cells(centres, polarization, u.reshape(-1, 3), rotation.reshape(-1, 3))
+        if self.magnets is not None:
+            # the discrete magnets, each carried by the layer's displacement and rotation at its centre
+            dimension = self.magnets.sizes
+            moved, turned = moved_cells(
+                self.magnets.centres,
+                self.polarization * self.magnets.directions,
+                lambda x: layer_displacement(x, layer=self.layer(), load=load),
+            )
+        else:
+            centres, dimension = layer_cells(size=self.size, thickness=self.thickness, cells=self.cells)
+            polarization = jnp.broadcast_to(self.polarization * jnp.asarray(self.direction), centres.shape)
+            u, rotation = layer_displacement_grid(
+                layer=self.layer(), load=load, size=self.size, cells=self.cells, grid=self.spectral
+            )
+            moved, turned = carried_cells(centres, polarization, u.reshape(-1, 3), rotation.reshape(-1, 3))
         return cells_field(points, centres=moved, dimension=dimension, polarization=turned)
 
     def transduce(self, field):

@@ -34,7 +34,7 @@ from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadou
 from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions, rotation
-from magdesign.scene.skin_scene import SkinScene
+from magdesign.scene.skin_scene import SkinMagnets, SkinScene
 from magdesign.scene.solids import Solid, check_apart, solid
 from magdesign.spec.checks import PlausibilityWarning, fields
 from magdesign.spec.keys import KEYS
@@ -361,13 +361,13 @@ def _soft_parts(spec):
 
 
 def _direction(magnet):
-    """[magnet] direction as a unit vector (3,), or None when absent."""
+    """A table's direction (a magnet's) as a unit vector (3,), or None when absent."""
     direction = _optional_vector(magnet, "direction", "1")
     if direction is None:
         return None
     norm = float(jnp.linalg.norm(direction))
     if norm == 0.0:
-        raise SpecError("magnet.direction: expected a nonzero vector [x, y, z], got zeros")
+        raise SpecError(f"{magnet.name}.direction: expected a nonzero vector [x, y, z], got zeros")
     return direction / norm
 
 
@@ -633,6 +633,32 @@ def _skin_chips(sensor):
     return chips, None, "sensor.chips"
 
 
+def _skin_magnets(magnet, direction, size, thickness):
+    """[[magnet.magnets]]: an eFlesh-like skin's discrete magnets (SkinMagnets; None when
+    absent), each inside the layer (else a SpecError naming its position), its direction
+    its own, else magnet.direction, else through the thickness."""
+    raw = magnet._get("magnets", [])
+    if not isinstance(raw, list) or not all(isinstance(item, dict) for item in raw):
+        raise SpecError(f"magnet.magnets: expected [[magnet.magnets]] tables, got {echo(raw)}")
+    rows = []
+    for index, item in enumerate(raw):
+        table = Table({f"magnet.magnets[{index}]": item}, f"magnet.magnets[{index}]")
+        centre, sides = (np.asarray(table.quantities(key, "m", length=3)) for key in ("position", "size"))
+        own = _direction(table)
+        table.done()
+        room = np.array([size[0] / 2, size[1] / 2, thickness / 2])
+        if np.any(np.abs(centre - [0.0, 0.0, thickness / 2]) + sides / 2 > room * (1.0 + CONTACT_RTOL)):
+            raise SpecError(
+                f"{table.name}.position: the magnet at {np.round(centre * 1e3, 6).tolist()} mm reaches out of the "
+                f"{size[0] * 1e3:g} x {size[1] * 1e3:g} x {thickness * 1e3:g} mm layer (0 <= z <= mechanics.thickness)"
+            )
+        rows.append([centre, sides, next(v for v in (own, direction, (0.0, 0.0, 1.0)) if v is not None)])
+    if not rows:
+        return None
+    centres, sizes, directions = (jnp.asarray(np.array(column, dtype=float)) for column in zip(*rows))
+    return SkinMagnets(centres=centres, sizes=sizes, directions=directions)
+
+
 def _skin_scene(spec, fidelity):
     if fidelity is not None:
         raise SpecError(f"fidelity: the skin has one mechanics model (a bonded linear layer), got {fidelity!r}")
@@ -650,6 +676,9 @@ def _skin_scene(spec, fidelity):
     shear_modulus = mechanics.quantity("shear_modulus", "Pa")
     poisson_ratio = mechanics.quantity("poisson_ratio", "1")
     mechanics.done()
+    magnets = _skin_magnets(magnet, direction, size, thickness)
+    if magnets is not None and magnet.has("cells"):
+        raise SpecError("magnet.cells: a skin with [[magnet.magnets]] has an unmagnetised layer, cut into no cells")
     cells = _counts(magnet, "cells", [16, 16, 8], "[along x, along y, through the thickness]")
     magnet.done()
     indenter = Table(spec, "indenter")
@@ -675,8 +704,8 @@ def _skin_scene(spec, fidelity):
             "a depth above 0 mm (the chips' sensing points under the skin's bottom face)"
         )
     check_fits(
-        f"magnet.cells = {list(cells)}, {chips.shape[0]} chips",
-        15.0 * math.prod(cells) * chips.shape[0],
+        f"{'magnet.cells = ' + str(list(cells)) if magnets is None else 'magnet.magnets'}, {chips.shape[0]} chips",
+        15.0 * (math.prod(cells) if magnets is None else magnets.centres.shape[0]) * chips.shape[0],
         what="the cells' field at the chips and its derivatives",
     )
     effects = _hall_effects(spec, hall)
@@ -698,6 +727,7 @@ def _skin_scene(spec, fidelity):
         direction=(0.0, 0.0, 1.0) if direction is None else tuple(float(v) for v in direction),
         cells=cells,
         map_grid=map_grid,
+        magnets=magnets,
     )
 
 
