@@ -77,11 +77,12 @@ def cells_field(
     points: Float[ArrayLike, "... 3"],
     *,
     centres: Float[ArrayLike, "n 3"],
-    dimension: Float[ArrayLike, "3"],
+    dimension: Float[ArrayLike, "3"] | Float[ArrayLike, "n 3"],
     polarization: Float[ArrayLike, "n 3"],
 ) -> Float[Array, "... 3"]:
     """Flux density B (T) at ``points`` (m, shape (..., 3)) of N axis-aligned cuboid cells of
-    sides ``dimension`` (m, (3,)) centred at ``centres`` (m, (N, 3)), each of uniform
+    sides ``dimension`` (m, (3,) for all, or (N, 3) for each: discrete magnets of their own
+    sizes) centred at ``centres`` (m, (N, 3)), each of uniform
     polarization J = mu0 M (T, (N, 3)). Exact for each cell (:func:`~magdesign.fields.cuboid.cuboid`'s
     accuracy), differentiable in every argument; evaluated in batches of points so that
     memory stays bounded for many points times many cells."""

@@ -6,7 +6,10 @@ Scene frame: the board's surface is z = 0; the layer (thickness h, sides L_x x L
 centred on the origin) fills 0 <= z <= h, bonded to the board; the chips' sensing points
 sit ``depth`` below the surface, at the given (x, y). The layer carries a uniform
 polarization J = J0 d (T, d a static unit vector: through the thickness or in-plane), cut
-into cuboid cells (:mod:`magdesign.fields.cells`).
+into cuboid cells (:mod:`magdesign.fields.cells`). The chips' positions are each a pair of
+scalars (x, y), so that a design can move one chip along one axis (``sensor.chips[i][k]``);
+a grid's chips are its unit offsets times ``pitch`` (``sensor.pitch``), so that a design can
+space the whole grid.
 
 A load point is a contact at (x, y) on the top surface with a normal force Fn (pressing)
 and a shear force (F_x, F_y). The sphere of radius R presses a patch of Hertz's radius
@@ -29,6 +32,17 @@ its centre: the field's change converges as the cells thin. Under a centred pres
 centre chip 1 mm below a 2 mm layer of 20 x 20 cells, the change was -246, 28, 114, 137 and
 143 uT at n_z = 1, 2, 4, 8 and 16 cells through the thickness: the error falls as n_z^-2
 from n_z = 2 on (21 % at 4, 5 % at 8, 1.4 % at 16).
+
+An eFlesh-like skin (Pattabiraman et al., "eFlesh: highly customizable magnetic touch
+sensing using cut-cell microstructures", 2025: a printed soft lattice carrying small magnets
+over magnetometers) carries discrete magnets instead (``magnets``, :class:`SkinMagnets`):
+cuboids inside the layer, the lattice taken as the effective elastic layer (its homogenised
+moduli). The layer itself is then unmagnetised; each magnet carries the polarization J0 along
+its own direction, moves rigidly with the layer's displacement at its centre and turns with
+the material's rotation there (:func:`magdesign.fields.cells.moved_cells`, the displacement
+from the layer's Hankel quadrature, :func:`~magdesign.mechanics.skin_layer.layer_displacement`).
+A magnet stiffer than the lattice moves as a rigid body, as modelled; that it stiffens the
+lattice around it is left out (the effective layer's moduli are the lattice's alone).
 
 The mechanics' "displacement" of this scene is the load itself: each load point's
 (x, y, Fn, F_x, F_y) (m, m, N, N, N), which the scene's motion effects (a lag) act on.
@@ -59,11 +73,12 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from magdesign.fields.cells import carried_cells, cells_field, layer_cells
+from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
 from magdesign.mechanics.skin_layer import (
     ElasticLayer,
     SpectralGrid,
     SurfaceLoad,
+    layer_displacement,
     layer_displacement_grid,
     spectral_grid,
 )
@@ -81,13 +96,36 @@ BACKGROUND_REFERENCE = 50 * uT
 LOAD_UNKNOWNS = ("x", "y", "normal", "shear_x", "shear_y")
 
 
+def _chip_pairs(chips) -> tuple[tuple[Float[Array, ""], Float[Array, ""]], ...]:
+    """Chips' positions (S, 2) as S pairs of scalars (x, y): leaves a design sets one by one."""
+    rows = jnp.asarray(chips, dtype=float)
+    if rows.ndim != 2 or rows.shape[-1] != 2:
+        raise ValueError(f"chips must be the chips' (x, y), shape (S, 2), got shape {rows.shape}")
+    return tuple((row[0], row[1]) for row in rows)
+
+
+class SkinMagnets(eqx.Module):
+    """Discrete magnets embedded in a skin's layer (an eFlesh-like skin, module docstring):
+    M cuboids, each with its ``centres`` (x, y, z) at rest (m, scene frame, inside the layer),
+    ``sizes`` (its sides, m) and ``directions`` (its polarization's unit vector), (M, 3) each.
+    They carry the scene's ``polarization`` J0 (T)."""
+
+    centres: Float[Array, "m 3"]
+    sizes: Float[Array, "m 3"]
+    directions: Float[Array, "m 3"]
+
+
 class SkinScene(AbstractScene):
     """A magnetic skin over a chip array (module docstring); lengths (m), J0 (T), moduli (Pa).
 
     ``direction`` (static): the polarization's unit vector; ``cells`` (static): the layer's
     cells (n_x, n_y, n_z); ``map_grid`` (static): the outputs' contact positions (n_x, n_y);
     ``spectral`` (static): the cells' wavevector lattice, by default chosen from the concrete
-    size and thickness at construction (module docstring).
+    size and thickness at construction (module docstring). ``chips``: each chip's (x, y)
+    (m), given as an (S, 2) array and kept as pairs of scalars (each a design parameter); in
+    units of ``pitch`` (m) where a pitch is given (a grid's unit offsets): the chips then sit
+    at ``chips * pitch`` (:meth:`chip_positions`). ``magnets``: discrete magnets in an
+    unmagnetised layer (an eFlesh-like skin), or None for a uniformly magnetised layer.
     """
 
     thickness: Float[Array, ""]
@@ -96,7 +134,7 @@ class SkinScene(AbstractScene):
     shear_modulus: Float[Array, ""]
     poisson_ratio: Float[Array, ""]
     sphere_radius: Float[Array, ""]
-    chips: Float[Array, "s 2"]
+    chips: tuple[tuple[Float[Array, ""], Float[Array, ""]], ...] = eqx.field(converter=_chip_pairs)
     depth: Float[Array, ""]
     noise: Float[Array, "3"]
     hall: Hall3D
@@ -105,6 +143,8 @@ class SkinScene(AbstractScene):
     cells: tuple[int, int, int] = eqx.field(static=True, default=(16, 16, 8))
     map_grid: tuple[int, int] = eqx.field(static=True, default=(5, 5))
     spectral: SpectralGrid | None = eqx.field(static=True, default=None)
+    pitch: Float[Array, ""] | None = None
+    magnets: SkinMagnets | None = None
 
     def __post_init__(self):
         # the cells' wavevector lattice, from the layer's values at construction (module docstring)
@@ -126,20 +166,33 @@ class SkinScene(AbstractScene):
 
     @property
     def parameter_paths(self):
-        return {
+        paths = {
             "magnet.polarization": lambda s: s.polarization,
             "mechanics.thickness": lambda s: s.thickness,
             "mechanics.shear_modulus": lambda s: s.shear_modulus,
             "sensor.depth": lambda s: s.depth,
             "indenter.radius": lambda s: s.sphere_radius,
         }
+        if self.pitch is not None:
+            paths["sensor.pitch"] = lambda s: s.pitch
+        else:
+            for i in range(len(self.chips)):
+                for k in range(2):
+                    paths[f"sensor.chips[{i}][{k}]"] = lambda s, i=i, k=k: s.chips[i][k]
+        return paths
 
     def chip_range(self):
         """The listed saturation effect, else the Hall chips' own range per axis."""
         return judged_saturation(self.effects, self.hall.full_scale)
 
+    def chip_positions(self) -> Float[Array, "s 2"]:
+        """The chips' (x, y) (m), (S, 2): ``chips``, times ``pitch`` where one is given."""
+        positions = jnp.stack([jnp.stack(chip) for chip in self.chips])
+        return positions if self.pitch is None else positions * self.pitch
+
     def sensor_poses(self):
-        positions = jnp.concatenate([self.chips, jnp.broadcast_to(-self.depth, (self.chips.shape[0], 1))], axis=-1)
+        chips = self.chip_positions()
+        positions = jnp.concatenate([chips, jnp.broadcast_to(-self.depth, (chips.shape[0], 1))], axis=-1)
         return positions, jnp.broadcast_to(jnp.eye(3), (positions.shape[0], 3, 3))
 
     def displacement(self, loads: Loads):
@@ -158,18 +211,27 @@ class SkinScene(AbstractScene):
         return (3.0 * force * self.sphere_radius / (4.0 * e_star)) ** (1.0 / 3.0)
 
     def source_field(self, points, displacement):
-        centres, dimension = layer_cells(size=self.size, thickness=self.thickness, cells=self.cells)
-        polarization = jnp.broadcast_to(self.polarization * jnp.asarray(self.direction), centres.shape)
         load = SurfaceLoad(
             centre=displacement[:2],
             radius=self.contact_radius(displacement[2]),
             normal_force=displacement[2],
             shear_force=displacement[3:5],
         )
-        u, rotation = layer_displacement_grid(
-            layer=self.layer(), load=load, size=self.size, cells=self.cells, grid=self.spectral
-        )
-        moved, turned = carried_cells(centres, polarization, u.reshape(-1, 3), rotation.reshape(-1, 3))
+        if self.magnets is not None:
+            # the discrete magnets, each carried by the layer's displacement and rotation at its centre
+            dimension = self.magnets.sizes
+            moved, turned = moved_cells(
+                self.magnets.centres,
+                self.polarization * self.magnets.directions,
+                lambda x: layer_displacement(x, layer=self.layer(), load=load),
+            )
+        else:
+            centres, dimension = layer_cells(size=self.size, thickness=self.thickness, cells=self.cells)
+            polarization = jnp.broadcast_to(self.polarization * jnp.asarray(self.direction), centres.shape)
+            u, rotation = layer_displacement_grid(
+                layer=self.layer(), load=load, size=self.size, cells=self.cells, grid=self.spectral
+            )
+            moved, turned = carried_cells(centres, polarization, u.reshape(-1, 3), rotation.reshape(-1, 3))
         return cells_field(points, centres=moved, dimension=dimension, polarization=turned)
 
     def transduce(self, field):
@@ -178,7 +240,8 @@ class SkinScene(AbstractScene):
     def map_points(self) -> Float[Array, "m 2"]:
         """The outputs' contact positions (M, 2) (m): a ``map_grid`` over the chips' bounding
         box, corners included; along an axis of one point, the box's middle."""
-        low, high = jnp.min(self.chips, axis=0), jnp.max(self.chips, axis=0)
+        chips = self.chip_positions()
+        low, high = jnp.min(chips, axis=0), jnp.max(chips, axis=0)
         xs, ys = (
             jnp.linspace(low[i], high[i], n) if n > 1 else ((low[i] + high[i]) / 2)[None]
             for i, n in enumerate(self.map_grid)
@@ -196,11 +259,11 @@ class SkinScene(AbstractScene):
         """(Cramer-Rao :class:`~magdesign.inverse.Bound` of the load state from all readings,
         the normal-force error (N) of a BACKGROUND_REFERENCE field along x, y and z (3,))."""
         jacobian = jax.jacfwd(lambda q: self.readings_at(q).ravel())(state)  # (3 S, 5)
-        noise = jnp.tile(self.noise, self.chips.shape[0])
+        noise = jnp.tile(self.noise, len(self.chips))
         bound = cramer_rao(jacobian, noise)
         # the least-squares fit's response to a uniform field added to every chip
         weighted = jacobian / noise[:, None]
-        fields = jnp.tile(jnp.eye(3) * BACKGROUND_REFERENCE, (1, self.chips.shape[0])) / noise  # (3, 3 S)
+        fields = jnp.tile(jnp.eye(3) * BACKGROUND_REFERENCE, (1, len(self.chips))) / noise  # (3, 3 S)
         shift = jnp.einsum("ij,kj->ki", bound.covariance @ weighted.T, fields)
         return bound, shift[:, 2]
 

@@ -15,7 +15,7 @@ _INTRO = """\
 A spec is a TOML file of tables. The scene's tables say what the sensor is: `[magnet]`,
 `[mechanics]`, `[sensor]`, `[geometry]`, `[load]`, optionally `[scene]` (the effects of the
 measurement chain), `[inductors]`, `[pole]`, `[indenter]` (what presses a skin),
-`[[magnet.extra]]` and `[[soft]]` (arrays of tables). A design spec adds the `[design.*]` tables: what the solver may change, what it must
+`[[magnet.extra]]`, `[[magnet.magnets]]` (a skin's discrete magnets) and `[[soft]]` (arrays of tables). A design spec adds the `[design.*]` tables: what the solver may change, what it must
 meet, and what it maximises. A key that is not listed here is an error naming the key.
 
 This page is generated from the code's own table of keys (`magdesign.spec.keys`): the readers
@@ -119,7 +119,7 @@ def _part_values(part) -> str:
 
 
 def _table_title(table: str) -> str:
-    return f"[[{table}]]" if table in ("soft", "magnet.extra") else f"[{table}]"
+    return f"[[{table}]]" if table in ("soft", "magnet.extra", "magnet.magnets") else f"[{table}]"
 
 
 def markdown() -> str:

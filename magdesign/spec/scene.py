@@ -34,7 +34,7 @@ from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadou
 from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions, rotation
-from magdesign.scene.skin_scene import SkinScene
+from magdesign.scene.skin_scene import SkinMagnets, SkinScene
 from magdesign.scene.solids import Solid, check_apart, solid
 from magdesign.spec.checks import PlausibilityWarning, fields
 from magdesign.spec.keys import KEYS
@@ -361,13 +361,13 @@ def _soft_parts(spec):
 
 
 def _direction(magnet):
-    """[magnet] direction as a unit vector (3,), or None when absent."""
+    """A table's direction (a magnet's) as a unit vector (3,), or None when absent."""
     direction = _optional_vector(magnet, "direction", "1")
     if direction is None:
         return None
     norm = float(jnp.linalg.norm(direction))
     if norm == 0.0:
-        raise SpecError("magnet.direction: expected a nonzero vector [x, y, z], got zeros")
+        raise SpecError(f"{magnet.name}.direction: expected a nonzero vector [x, y, z], got zeros")
     return direction / norm
 
 
@@ -620,15 +620,43 @@ def check_contact_patch(scene, force):
 
 
 def _skin_chips(sensor):
-    """The skin's chips (S, 2) (m) and the key that placed them: sensor.chips, or sensor.grid at sensor.pitch."""
+    """(the skin's chips (S, 2) (m), None), or (a grid's unit offsets, its pitch (m): the
+    parameter sensor.pitch, which a design varies), and the key that placed them."""
     if sensor.has("grid") == sensor.has("chips"):
         raise SpecError(
             "sensor.chips: expected the chips' positions [[x, y], ...] or sensor.grid with sensor.pitch "
             f"({'both were' if sensor.has('grid') else 'neither was'} given)"
         )
     if sensor.has("grid"):
-        return np.asarray(grid_positions(_grid(sensor), sensor.quantity("pitch", "m")))[:, :2], "sensor.grid"
-    return np.asarray(sensor.points("chips", default=None, plane=True), dtype=float).reshape(-1, 2), "sensor.chips"
+        return np.asarray(grid_positions(_grid(sensor), 1.0))[:, :2], sensor.quantity("pitch", "m"), "sensor.grid"
+    chips = np.asarray(sensor.points("chips", default=None, plane=True), dtype=float).reshape(-1, 2)
+    return chips, None, "sensor.chips"
+
+
+def _skin_magnets(magnet, direction, size, thickness):
+    """[[magnet.magnets]]: an eFlesh-like skin's discrete magnets (SkinMagnets; None when
+    absent), each inside the layer (else a SpecError naming its position), its direction
+    its own, else magnet.direction, else through the thickness."""
+    raw = magnet._get("magnets", [])
+    if not isinstance(raw, list) or not all(isinstance(item, dict) for item in raw):
+        raise SpecError(f"magnet.magnets: expected [[magnet.magnets]] tables, got {echo(raw)}")
+    rows = []
+    for index, item in enumerate(raw):
+        table = Table({f"magnet.magnets[{index}]": item}, f"magnet.magnets[{index}]")
+        centre, sides = (np.asarray(table.quantities(key, "m", length=3)) for key in ("position", "size"))
+        own = _direction(table)
+        table.done()
+        room = np.array([size[0] / 2, size[1] / 2, thickness / 2])
+        if np.any(np.abs(centre - [0.0, 0.0, thickness / 2]) + sides / 2 > room * (1.0 + CONTACT_RTOL)):
+            raise SpecError(
+                f"{table.name}.position: the magnet at {np.round(centre * 1e3, 6).tolist()} mm reaches out of the "
+                f"{size[0] * 1e3:g} x {size[1] * 1e3:g} x {thickness * 1e3:g} mm layer (0 <= z <= mechanics.thickness)"
+            )
+        rows.append([centre, sides, next(v for v in (own, direction, (0.0, 0.0, 1.0)) if v is not None)])
+    if not rows:
+        return None
+    centres, sizes, directions = (jnp.asarray(np.array(column, dtype=float)) for column in zip(*rows))
+    return SkinMagnets(centres=centres, sizes=sizes, directions=directions)
 
 
 def _skin_scene(spec, fidelity):
@@ -641,8 +669,6 @@ def _skin_scene(spec, fidelity):
     magnet.choice("shape", ("skin",))
     polarization = magnet.quantity("polarization", "T")
     direction = _direction(magnet)
-    cells = _counts(magnet, "cells", [16, 16, 8], "[along x, along y, through the thickness]")
-    magnet.done()
     mechanics = Table(spec, "mechanics")
     mechanics.choice("model", ("bonded_layer",))
     thickness = mechanics.quantity("thickness", "m")
@@ -650,13 +676,19 @@ def _skin_scene(spec, fidelity):
     shear_modulus = mechanics.quantity("shear_modulus", "Pa")
     poisson_ratio = mechanics.quantity("poisson_ratio", "1")
     mechanics.done()
+    magnets = _skin_magnets(magnet, direction, size, thickness)
+    if magnets is not None and magnet.has("cells"):
+        raise SpecError("magnet.cells: a skin with [[magnet.magnets]] has an unmagnetised layer, cut into no cells")
+    cells = _counts(magnet, "cells", [16, 16, 8], "[along x, along y, through the thickness]")
+    magnet.done()
     indenter = Table(spec, "indenter")
     radius = indenter.quantity("radius", "m")
     indenter.done()
     sensor = Table(spec, "sensor")
     sensor.choice("model", ("hall3d",))
     hall = _hall(sensor)
-    chips, chips_key = _skin_chips(sensor)
+    offsets, pitch, chips_key = _skin_chips(sensor)
+    chips = offsets if pitch is None else offsets * pitch
     depth = sensor.quantity("depth", "m")
     map_grid = _counts(sensor, "map_grid", [5, 5], "[along x, along y]")
     sensor.done()
@@ -672,8 +704,8 @@ def _skin_scene(spec, fidelity):
             "a depth above 0 mm (the chips' sensing points under the skin's bottom face)"
         )
     check_fits(
-        f"magnet.cells = {list(cells)}, {chips.shape[0]} chips",
-        15.0 * math.prod(cells) * chips.shape[0],
+        f"{'magnet.cells = ' + str(list(cells)) if magnets is None else 'magnet.magnets'}, {chips.shape[0]} chips",
+        15.0 * (math.prod(cells) if magnets is None else magnets.centres.shape[0]) * chips.shape[0],
         what="the cells' field at the chips and its derivatives",
     )
     effects = _hall_effects(spec, hall)
@@ -686,7 +718,8 @@ def _skin_scene(spec, fidelity):
         shear_modulus=jnp.asarray(shear_modulus),
         poisson_ratio=jnp.asarray(poisson_ratio),
         sphere_radius=jnp.asarray(radius),
-        chips=jnp.asarray(chips),
+        chips=jnp.asarray(offsets),
+        pitch=None if pitch is None else jnp.asarray(pitch),
         depth=jnp.asarray(depth),
         noise=jnp.broadcast_to(jnp.asarray(noise, dtype=float), (3,)),
         hall=hall,
@@ -694,6 +727,7 @@ def _skin_scene(spec, fidelity):
         direction=(0.0, 0.0, 1.0) if direction is None else tuple(float(v) for v in direction),
         cells=cells,
         map_grid=map_grid,
+        magnets=magnets,
     )
 
 
@@ -717,7 +751,7 @@ def check_field_samples(scene, points):
     if isinstance(scene, FilmScene):
         sensors = int(np.prod(scene.grid))
     elif isinstance(scene, SkinScene):
-        sensors = int(scene.chips.shape[0])
+        sensors = len(scene.chips)
     else:
         sensors = int(np.shape(getattr(scene, "sensor_positions", np.zeros((1, 3))))[0])
     quadrature = max((effect.points for effect in scene.effects if effect.name == "area_averaging"), default=1)

@@ -50,6 +50,7 @@ def test_the_example_builds_the_skin_it_states():
             "sensor.depth": 1e-3,
             "indenter.radius": 2e-3,
         }
+        | {f"sensor.chips[{i}][{k}]": xy for i, chip in enumerate(cross) for k, xy in enumerate(chip)}
     )
     np.testing.assert_allclose(scene.size, [0.03, 0.03])
     # without the noise effect the outputs' noise is one LSB: the MLX90393 datasheet's 0.150 uT
@@ -69,7 +70,7 @@ def test_a_grid_places_the_chips_and_the_noise_effect_sets_the_outputs_noise():
         spec["scene"].update(effects=["noise"], noise="2 uT")
 
     scene = scene_from_spec(skin(edit))
-    assert sorted(map(tuple, np.asarray(scene.chips).round(12))) == [
+    assert sorted(map(tuple, np.asarray(scene.chip_positions()).round(12))) == [
         (-0.004, -0.004),
         (-0.004, 0.004),
         (0.004, -0.004),
