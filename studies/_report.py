@@ -18,12 +18,15 @@ import time
 OUT = pathlib.Path(__file__).resolve().parent / "out"
 
 
-def arguments(name: str, argv=None, description: str = "") -> argparse.Namespace:
+def arguments(name: str, argv=None, description: str = "", plot: bool = False) -> argparse.Namespace:
     """The command line every study takes: ``--quick`` (small grids, cheapest fidelity,
-    for CI) and ``--out DIR`` (default ``studies/out/<name>``)."""
+    for CI) and ``--out DIR`` (default ``studies/out/<name>``); with ``plot``, also
+    ``--plot`` (draw the study's figures, which it leaves out otherwise)."""
     parser = argparse.ArgumentParser(prog=f"studies/{name}.py", description=description)
     parser.add_argument("--quick", action="store_true", help="small grids and the cheapest fidelity (CI)")
     parser.add_argument("--out", type=pathlib.Path, default=OUT / name, help="output folder")
+    if plot:
+        parser.add_argument("--plot", action="store_true", help="draw the figures")
     return parser.parse_args(argv)
 
 

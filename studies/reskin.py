@@ -1,0 +1,594 @@
+"""ReSkin: a magnetised elastomer skin over five MLX90393 chips, at magdesign's skin scene.
+
+R. Bhirangi, T. Hellebrekers, C. Majidi and A. Gupta, "ReSkin: versatile, replaceable,
+lasting tactile skins" (2021) (docs/references.md), "the paper" below: a 2-3 mm elastomer
+skin loaded with magnetised microparticles over a board of five MLX90393 chips, read by a
+learned model, which detects 0.1 N and localises a contact to about 1 mm. The board is the
+paper's open "5X ReSkin" design (the reskin_sensor repository's circuits/5X_ReSkin.Zip):
+its pick-and-place file places the five chips in a cross at 7 mm pitch on a 20 mm square.
+
+The study builds that skin (magdesign.scene.skin_scene.SkinScene) and
+
+1. sets the model's bounds beside the paper's figures: the Cramer-Rao bound of the normal
+   and shear forces and of the contact's position over the chips' area, the saturation of
+   the chips and the Earth's field as an error in force, at the paper's 0.1 N;
+2. sweeps the chips' pitch and the skin's thickness (one compiled scene structure: the
+   pitch moves the chips, the thickness is a parameter), with the first-order spread of each
+   output under the tolerances of the magnetisation and the chips' placement (forward
+   differences through magdesign.design.tolerance.perturb), and a Monte Carlo of those
+   tolerances at ReSkin's design;
+3. solves the polarisation that halves ReSkin's normal-force bound with the same chips and
+   no chip saturating (magdesign.design.solve), and checks the answer with the sweep's scene.
+
+What neither the paper's summary figures nor the board give (the elastomer's modulus, the
+magnetisation, the chips' noise, the indenter) is an assumption named in the report.
+
+    python studies/reskin.py [--quick] [--plot] [--out DIR]
+"""
+
+import dataclasses
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from _report import Report, arguments, progress
+
+from magdesign.design import solve
+from magdesign.design.tolerance import perturb
+from magdesign.mechanics.skin_layer import SpectralGrid, spectral_grid
+from magdesign.scene import loads_from_spec, outputs, with_parameters
+from magdesign.spec.design import problem_from_spec
+from magdesign.spec.tolerance import tolerance_problem_from_spec
+from magdesign.units import mm, mT
+
+NAME = "reskin"
+MIL = 25.4e-6  # m: the board files' unit, a thousandth of an inch
+mN = 1e-3  # N
+
+# The 5X ReSkin board (reskin_sensor repository, circuits/5X_ReSkin.Zip). "Pick Place for
+# PCB.txt": five "Melexis MLX90393ELW-ABA-011-SP", centres (Mid X, Mid Y) in mil, U1, U3,
+# U5, U2, U4. PCB.Outline: the sensing square spans x 2165.35-2952.76 mil (20.0 mm) and
+# y 2755.90-3549.24 mil, centred on U1 (x exactly, y within 1 mil); circuits/README.md:
+# "20x29mm" with the connector's tab.
+BOARD_CHIPS_MIL = (
+    (2559.055, 3153.543),
+    (2834.646, 3153.543),
+    (2283.465, 3155.543),
+    (2559.055, 3429.134),
+    (2559.055, 2877.953),
+)
+BOARD_SIDE = (2952.76 - 2165.35) * MIL  # m, the square's side along x (PCB.Outline)
+
+# Published: the paper's summary figures, as stated with its release (the body's sections
+# were not at hand, so the report cites the summary, not a section or figure).
+DETECTED_FORCE = 0.1  # N: "detects 0.1 N"
+LOCALISATION = 1.0 * mm  # "localises contact to about 1 mm" (a learned model's test-set error)
+THICKNESS_RANGE = (2.0 * mm, 3.0 * mm)  # "2-3 mm" skins
+CHIPS = 5  # five MLX90393 magnetometers (also the board's pick-and-place file)
+
+# Assumptions (stated in the report; no source at hand gives them).
+THICKNESS = 2.0 * mm  # the thinner end of the published 2-3 mm
+SHEAR_MODULUS = 100e3  # Pa: a soft silicone of about 0.3 MPa Young's modulus
+POISSON = 0.49  # nearly incompressible
+POLARIZATION = 20 * mT  # J0 of the particle-loaded elastomer, through the thickness
+DEPTH = 1.0 * mm  # the chips' Hall plates below the skin's bonded face
+SPHERE = 2.0 * mm  # the indenter's radius
+SKIN_SIDE = 20 * mm  # the skin covers the board's sensing square
+EARTH = ("0 T", "0 T", "50 uT")  # the background the chips read, as examples/skin.toml
+# The chips' noise: one LSB per axis of the MLX90393 at GAIN_SEL = 7, RES_XYZ = 0 (the
+# skin scene's default; magdesign.transducers.mlx90393), the setting that the board's
+# firmware library (arduino-MLX90393's begin()) chooses. The datasheet's RMS noise at the
+# firmware's OSR = 3, DIG_FILT = 7 is not in the copies at hand: the noise is assumed.
+NOISE_NOTE = "one LSB per axis (0.150 uT x, y; 0.242 uT z)"
+# Tolerances of the Monte Carlo and of the sweep's spreads (assumed): the magnetisation
+# varies with the particle loading from skin to skin; the chips are placed by a pick-and-place.
+POLARIZATION_TOLERANCE = "10 %"
+PLACEMENT_TOLERANCE = "50 um"
+# The design's bounds on J0: up to 10 times ReSkin's assumed 20 mT.
+DESIGN_BOUNDS = ("5 mT", "200 mT")
+DETECTION_SIGMAS = 3.0  # a force is "detected" at three standard deviations of its estimate
+
+PITCHES = {True: (6 * mm, 7 * mm, 8 * mm), False: (5 * mm, 6 * mm, 7 * mm, 8 * mm, 9 * mm)}
+THICKNESSES = {True: (2 * mm, 3 * mm), False: (1.5 * mm, 2 * mm, 2.5 * mm, 3 * mm)}
+# Cells and map: quick mode checks the pipeline only (2 cells through the thickness leave the
+# field's change ~80 % off, docs/skins.md, and 4 across the chips leave the press unresolved);
+# full mode's 6 through the thickness are ~10 % off (n_z^-2 from 21 % at 4), and one evaluation
+# of the outputs costs ~40 s on two loaded cores, so its sweep and Monte Carlo stay small
+CELLS = {True: (4, 4, 2), False: (8, 8, 6)}
+MAP_GRID = {True: (2, 2), False: (5, 5)}
+SAMPLES = {True: 8, False: 40}
+# The sweep's cells whose spreads are computed (17 evaluations each): two corners in quick
+# mode, the two extreme corners in full mode (ReSkin's own is computed at the board's chips)
+SPREAD_CELLS = {
+    True: ((6 * mm, 2 * mm), (8 * mm, 3 * mm)),
+    False: ((5 * mm, 1.5 * mm), (9 * mm, 3 * mm)),
+}
+STEP = 0.01  # unit sigmas: the forward differences' step along each tolerance's variate
+SEED = 0
+# The yield's limits (SI): a 3-sigma detection of 0.1 N, a 1 mm localisation, no chip saturating
+LIMITS = {
+    "force_resolution_normal": DETECTED_FORCE / DETECTION_SIGMAS,
+    "localisation_worst": LOCALISATION,
+    "saturation_ratio": 1.0,
+}
+
+OUTPUTS = (
+    "force_resolution_normal",
+    "force_resolution_shear",
+    "localisation_worst",
+    "localisation_median",
+    "crosstalk",
+    "background_force_error",
+    "saturation_ratio",
+)
+
+
+def board_chips() -> np.ndarray:
+    """The board's chip centres (5, 2) (m), relative to U1 (the middle chip)."""
+    mil = np.asarray(BOARD_CHIPS_MIL)
+    return (mil - mil[0]) * MIL
+
+
+def cross(pitch: float) -> np.ndarray:
+    """Five chips (5, 2) (m) in the board's cross (middle, +x, -x, +y, -y) at ``pitch`` (m)."""
+    return pitch * np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=float)
+
+
+def skin_spec(chips, *, quick: bool, normal: float = DETECTED_FORCE, contact=(0.0, 0.0)) -> dict:
+    """ReSkin's spec: the assumed skin over ``chips`` (5, 2) (m), pressed at ``contact`` (m)
+    from 0 to ``normal`` (N)."""
+    return {
+        "scene": {"effects": ["background", "saturation"], "background": list(EARTH)},
+        "magnet": {
+            "shape": "skin",
+            "polarization": f"{POLARIZATION} T",
+            "direction": [0, 0, 1],
+            "cells": list(CELLS[quick]),
+        },
+        "mechanics": {
+            "model": "bonded_layer",
+            "thickness": f"{THICKNESS} m",
+            "size": [f"{SKIN_SIDE} m", f"{SKIN_SIDE} m"],
+            "shear_modulus": f"{SHEAR_MODULUS} Pa",
+            "poisson_ratio": POISSON,
+        },
+        "indenter": {"radius": f"{SPHERE} m"},
+        "sensor": {
+            "model": "hall3d",
+            "preset": "MLX90393",
+            "chips": [[f"{x} m", f"{y} m"] for x, y in np.asarray(chips)],
+            "depth": f"{DEPTH} m",
+            "map_grid": list(MAP_GRID[quick]),
+        },
+        "load": {
+            "normal": ["0 N", f"{normal} N"],
+            "contact_x": [f"{contact[0]} m"] * 2,
+            "contact_y": [f"{contact[1]} m"] * 2,
+            "points": 2,
+        },
+    }
+
+
+def design_spec(chips, *, quick: bool, target: float) -> dict:
+    """The spec of the design: the skin's J0 for a normal-force bound of ``target`` (N) at
+    the same chips and thickness, with no chip saturating."""
+    spec = skin_spec(chips, quick=quick)
+    low, high = DESIGN_BOUNDS
+    spec["design"] = {
+        "variables": {"magnet.polarization": {"lower": low, "upper": high}},
+        "targets": {"force_resolution_normal": f"{target} N"},
+        "limits": {"saturation_ratio": {"upper": 1}},
+    }
+    return spec
+
+
+def tolerance_spec(chips, *, quick: bool) -> dict:
+    """ReSkin's skin with the tolerances of J0 and the chips' placement; the yield's limits
+    are the paper's figures (a 3-sigma detection of 0.1 N, a 1 mm localisation)."""
+    spec = skin_spec(chips, quick=quick)
+    low, high = DESIGN_BOUNDS
+    spec["design"] = {
+        "variables": {"magnet.polarization": {"lower": low, "upper": high}},
+        "limits": {
+            "force_resolution_normal": {"upper": f"{DETECTED_FORCE / DETECTION_SIGMAS} N"},
+            "localisation_worst": {"upper": f"{LOCALISATION} m"},
+            "saturation_ratio": {"upper": 1},
+        },
+        "tolerances": {"magnet.polarization": POLARIZATION_TOLERANCE, "placement": PLACEMENT_TOLERANCE},
+    }
+    return spec
+
+
+def shared_grid(scene, thicknesses) -> SpectralGrid:
+    """One wavevector lattice for every thickness swept: the thickest layer's periods (the
+    most padding) and the thinnest's refinement (the deepest reach), so that a single
+    compiled scene structure serves the whole sweep at the accuracy of each thickness's own."""
+    thick = spectral_grid(size=scene.size, thickness=max(thicknesses), cells=scene.cells)
+    thin = spectral_grid(size=scene.size, thickness=min(thicknesses), cells=scene.cells)
+    return SpectralGrid(periods=thick.periods, refine=thin.refine)
+
+
+evaluate = eqx.filter_jit(outputs)
+
+
+def plain(values: dict) -> dict:
+    """{name: Python float} of a dict of scalar arrays."""
+    return {name: float(value) for name, value in values.items()}
+
+
+def saturating_force(scene, quick: bool) -> tuple[float, int, float]:
+    """(F, chip, rest): the normal force (N) at which the first chip's reading reaches its
+    range, pressing over each chip in turn; the chip (its index); and the largest |reading|
+    over the range at rest. F extrapolates that ratio linearly from rest and 0.1 N (the layer
+    is linear; past a / h ~ 0.5 the Hertz patch and past strains of ~10 % the linear layer
+    leave their reach, so a force far above 0.1 N is an estimate of its order only)."""
+    chips = np.asarray(scene.chip_positions())
+    rest = float(evaluate(scene, loads_from_spec(skin_spec(chips, quick=quick, normal=0.0)))["saturation_ratio"])
+    forces = []
+    for contact in chips:
+        loads = loads_from_spec(skin_spec(chips, quick=quick, contact=contact))
+        pressed = float(evaluate(scene, loads)["saturation_ratio"])
+        forces.append(DETECTED_FORCE * (1.0 - rest) / (pressed - rest) if pressed > rest else np.inf)
+    chip = int(np.argmin(forces))
+    return forces[chip], chip, rest
+
+
+def spreads(tp, scene, loads, nominal: dict) -> dict:
+    """{output: {"total": first-order standard deviation, group: its part}} (SI) of
+    ``scene``'s outputs under the tolerances of ``tp``, the parts by group of variates
+    ("magnet.polarization", "placement.x": every chip's x, ...) in quadrature: forward
+    differences of STEP unit sigmas along each variate (magdesign.design.tolerance.perturb),
+    through the one compiled outputs (the library's forward-mode spreads compile the
+    outputs' derivatives: minutes)."""
+    labels, unit_std = tp.labels, np.asarray(tp.unit_std)
+    squares = {name: {} for name in OUTPUTS}
+    for i, label in enumerate(labels):
+        u = np.zeros(len(labels))
+        u[i] = STEP
+        moved = plain(evaluate(perturb(scene, tp.inputs, tp.sensors, jnp.asarray(u)), loads))
+        for name in OUTPUTS:
+            part = (moved[name] - nominal[name]) / STEP * unit_std[i]
+            squares[name][label] = squares[name].get(label, 0.0) + part**2
+    return {
+        name: {"total": float(np.sqrt(sum(part.values()))), **{k: float(np.sqrt(v)) for k, v in part.items()}}
+        for name, part in squares.items()
+    }
+
+
+def sampled(tp, scene, loads, samples: int) -> dict:
+    """A Monte Carlo of the tolerances (normal variates, seed SEED) through the compiled
+    outputs: each output's mean and standard deviation, and the yield against the paper's
+    figures (LIMITS)."""
+    draws = np.random.default_rng(SEED).standard_normal((samples, len(tp.labels)))
+    values = [plain(evaluate(perturb(scene, tp.inputs, tp.sensors, jnp.asarray(u)), loads)) for u in draws]
+    table = {name: np.array([v[name] for v in values]) for name in OUTPUTS}
+    passing = np.all([table[name] <= upper for name, upper in LIMITS.items()], axis=0)
+    fraction = float(passing.mean())
+    return {
+        "samples": samples,
+        "seed": SEED,
+        "yield": fraction,
+        "yield_stderr": float(np.sqrt(fraction * (1 - fraction) / samples)),
+        "outputs": {name: {"mean": float(v.mean()), "std": float(v.std())} for name, v in table.items()},
+    }
+
+
+def sweep(tp, scene, loads, quick: bool) -> list[dict]:
+    """The outputs and their first-order spreads under the tolerances (SI) at every pitch
+    and thickness: the same compiled structure, the chips moved and h a parameter."""
+    rows = []
+    for pitch in PITCHES[quick]:
+        at_pitch = dataclasses.replace(scene, chips=cross(pitch))
+        for thickness in THICKNESSES[quick]:
+            cell = with_parameters(at_pitch, {"mechanics.thickness": thickness})
+            values = plain(evaluate(cell, loads))
+            spread = spreads(tp, cell, loads, values) if (pitch, thickness) in SPREAD_CELLS[quick] else None
+            rows.append({"pitch": pitch, "thickness": thickness, **values, "sigma": spread})
+            progress(f"pitch {pitch / mm:g} mm, thickness {thickness / mm:g} mm")
+    return rows
+
+
+def main(argv=None):
+    args = arguments(NAME, argv, __doc__, plot=True)
+    quick = args.quick
+    report = Report(NAME, "ReSkin: a magnetised skin over five MLX90393 chips (Bhirangi et al. 2021)", args.out, quick)
+    chips = board_chips()
+    pitch = float(np.mean(np.linalg.norm(chips[1:], axis=1)))
+    # the skin with its tolerances' effects (placement, at zero: the same outputs), on the
+    # sweep's lattice: one scene structure, compiled once, for every evaluation below
+    tp = tolerance_problem_from_spec(tolerance_spec(chips, quick=quick))
+    grid = shared_grid(tp.scene, THICKNESSES[quick] + (THICKNESS,))
+    scene, loads = dataclasses.replace(tp.scene, spectral=grid), tp.loads
+
+    progress("ReSkin's skin at the board's chips, pressed with 0.1 N (compiles the outputs' Jacobians)")
+    base = plain(evaluate(scene, loads))
+    contact_radius = float(scene.contact_radius(DETECTED_FORCE))
+    f_sat, sat_chip, rest_ratio = saturating_force(scene, quick)
+    j0_saturating = POLARIZATION / rest_ratio  # the rest field is linear in J0
+    base_spread = spreads(tp, scene, loads, base)
+
+    progress("the sweep of pitch and thickness")
+    rows = sweep(tp, scene, loads, quick)
+    progress(f"Monte Carlo of the tolerances at ReSkin's design ({SAMPLES[quick]} samples)")
+    mc = sampled(tp, scene, loads, SAMPLES[quick])
+
+    progress(
+        "the design: half ReSkin's normal-force bound with the same chips, no chip saturating (compiles derivatives)"
+    )
+    target = base["force_resolution_normal"] / 2
+    problem, _ = problem_from_spec(design_spec(chips, quick=quick, target=target))
+    answer = solve(problem)
+    designed = plain(evaluate(with_parameters(scene, dict(answer.parameters)), loads))
+
+    report.comparison(comparison_rows(base, pitch, contact_radius))
+    report.heading("Assumptions")
+    report.text(
+        "The paper's summary figures and the board's files fix the chips (five MLX90393, their positions) and the "
+        "skin's thickness range; nothing at hand gives the rest, which is assumed: "
+        f"a skin {THICKNESS / mm:g} mm thick (the thinner end of 2-3 mm) and {SKIN_SIDE / mm:g} mm square (the board's "
+        f"sensing square, {BOARD_SIDE / mm:.3g} mm in its outline), shear modulus {SHEAR_MODULUS / 1e3:g} kPa and "
+        f"Poisson's ratio {POISSON:g} (a soft, nearly incompressible silicone), polarisation J0 = {POLARIZATION / mT:g} mT "
+        f"through the thickness (the particles' loading and magnetisation), the chips' Hall plates {DEPTH / mm:g} mm below "
+        f"the skin, a sphere of radius {SPHERE / mm:g} mm as the indenter, the Earth's 50 uT along z, and the chips' noise "
+        f"{NOISE_NOTE}: the MLX90393 at GAIN_SEL = 7, RES_XYZ = 0, the board firmware library's setting (its "
+        "datasheet's RMS noise at that setting is not in the copies at hand). Every bound below scales as 1 / J0 and "
+        "as the noise; the tolerances (J0 "
+        f"{POLARIZATION_TOLERANCE}, each chip's placement {PLACEMENT_TOLERANCE} per axis) are assumed too."
+    )
+    report.text(
+        f"Cells {CELLS[quick]} through the layer, the bounds' map {MAP_GRID[quick]} contact positions over the chips' "
+        f"bounding box. {QUICK_NOTE if quick else FULL_NOTE}"
+    )
+
+    report.heading("The bounds at 0.1 N")
+    report.text(
+        f"Hertz's contact radius of the {SPHERE / mm:g} mm sphere at 0.1 N is {contact_radius / mm:.3g} mm, "
+        f"a / h = {contact_radius / THICKNESS:.2g}: within the half-space patch's reach (about 0.5). "
+        f"At rest the largest chip reading is {rest_ratio:.3g} of the chip's range: the skin's own field at the chips "
+        f"and the Earth's. A press moves it little: over chip {sat_chip} (0: the middle "
+        f"one), where it moves most, linear extrapolation from 0.1 N reaches the range at about {f_sat:.2g} N, far past "
+        "the Hertz patch's and the linear layer's reach and any force the skin bears: no load within the model's reach saturates a chip; the "
+        "skin's field at rest does, once J0 passes about "
+        f"{j0_saturating / mT:.3g} mT (J0 / {rest_ratio:.3g}, the Earth's 50 uT aside), where the normal-force bound "
+        f"would be {base['force_resolution_normal'] * POLARIZATION / j0_saturating / mN:.3g} mN."
+    )
+    report.table(["output", "value", "unit"], [[name, base[name], UNITS[name]] for name in OUTPUTS])
+
+    report.heading("Pitch and thickness, with the tolerances")
+    report.text(
+        "The chips in the board's cross at each pitch, the skin at each thickness, pressed with 0.1 N; '+-' is the "
+        f"first-order standard deviation under the tolerances (J0 {POLARIZATION_TOLERANCE}, each chip's placement "
+        f"{PLACEMENT_TOLERANCE} per axis), by forward differences along each variate "
+        f"({'at the corners of the sweep only in quick mode' if quick else 'at every cell'})."
+    )
+    report.table(SWEEP_HEADERS, [sweep_cells(row) for row in rows])
+    best = min(rows, key=lambda row: row["force_resolution_normal"])
+    report.text(
+        f"The finest normal-force bound of the sweep is {best['force_resolution_normal'] / mN:.3g} mN at a pitch of "
+        f"{best['pitch'] / mm:g} mm and a {best['thickness'] / mm:g} mm skin; ReSkin's (the board's chips, "
+        f"{THICKNESS / mm:g} mm) is {base['force_resolution_normal'] / mN:.3g} mN."
+    )
+    report.text(
+        "At ReSkin's design the spreads' parts (first order, SI): "
+        + "; ".join(
+            f"{name}: " + ", ".join(f"{key} {value:.3g}" for key, value in base_spread[name].items())
+            for name in ("force_resolution_normal", "localisation_worst", "saturation_ratio")
+        )
+        + ". The readings are linear in J0, so J0's part of every bound is its relative tolerance times the bound."
+    )
+    report.text(
+        f"Monte Carlo of the tolerances at ReSkin's design ({mc['samples']} samples, seed {mc['seed']}): the yield "
+        f"against the paper's figures (a {DETECTION_SIGMAS:g}-sigma detection of 0.1 N, localisation within 1 mm, no "
+        f"chip saturating) is {mc['yield']:.3g} +- {mc['yield_stderr']:.2g}."
+    )
+    report.table(
+        ["output", "nominal", "mean (samples)", "std (samples)", "std (first order)", "unit"],
+        [
+            [name, base[name], o["mean"], o["std"], base_spread[name]["total"], UNITS[name]]
+            for name, o in mc["outputs"].items()
+        ],
+    )
+    if args.plot:
+        figure(report, rows)
+
+    report.heading("A design that halves ReSkin's normal-force bound")
+    report.text(
+        f"Target: force_resolution_normal = {target / mN:.4g} mN (half of ReSkin's), the same chips and thickness, no "
+        f"chip saturating (saturation_ratio <= 1); variable J0 in [{DESIGN_BOUNDS[0]}, {DESIGN_BOUNDS[1]}]. The solver's "
+        f"status: {answer.status}; J0 = {answer.parameters['magnet.polarization'] / mT:.4g} mT. Checked with the "
+        f"sweep's scene: force_resolution_normal = {designed['force_resolution_normal'] / mN:.4g} mN, saturation_ratio "
+        f"= {designed['saturation_ratio']:.3g}, background_force_error = {designed['background_force_error']:.3g} N. "
+        "The readings are linear in J0, so every bound scales as 1 / J0: the answer is twice ReSkin's J0, which the "
+        "skin's particle loading or magnetising field would have to give."
+    )
+
+    report.result(
+        "published",
+        {
+            "detected_force": DETECTED_FORCE,
+            "localisation": LOCALISATION,
+            "thickness_range": THICKNESS_RANGE,
+            "chips": CHIPS,
+        },
+    )
+    report.result(
+        "assumptions",
+        {
+            "thickness": THICKNESS,
+            "shear_modulus": SHEAR_MODULUS,
+            "poisson_ratio": POISSON,
+            "polarization": POLARIZATION,
+            "depth": DEPTH,
+            "sphere_radius": SPHERE,
+            "skin_side": SKIN_SIDE,
+            "cells": CELLS[quick],
+            "map_grid": MAP_GRID[quick],
+        },
+    )
+    report.result("chips", chips)
+    report.result("pitch", pitch)
+    report.result("board_side", BOARD_SIDE)
+    report.result("contact_radius", contact_radius)
+    report.result("outputs", base)
+    report.result("units", {name: UNITS[name] for name in OUTPUTS})
+    report.result(
+        "saturation", {"force": f_sat, "chip": sat_chip, "rest_ratio": rest_ratio, "polarization": j0_saturating}
+    )
+    report.result("sweep", rows)
+    report.result("spread", base_spread)
+    report.result("monte_carlo", mc)
+    report.result(
+        "design",
+        {"status": answer.status, "target": target, "parameters": dict(answer.parameters), "checked": designed},
+    )
+    report.write()
+
+
+QUICK_NOTE = (
+    "Quick mode checks the study's pipeline, not ReSkin: at 2 cells through the thickness the field's change under a "
+    "press is about 80 % off (docs/skins.md: 28 against 143 uT under a centred press), 4 cells across the chips do "
+    "not resolve the 0.7 mm contact patch, and the 2 x 2 map holds only the corners of the chips' box, where the "
+    "bounds are far from their worst. Its bounds are not ReSkin's; full mode's are."
+)
+FULL_NOTE = (
+    "The field's change is about 10 % off at 6 cells through the thickness (docs/skins.md: n_z^-2 from 21 % at 4); "
+    "across, the worst point's normal-force bound is not converged: a trial at ReSkin's design (5 x 5 map) gave "
+    "44 mN at cells (8, 8, 6) and 0.28 N at (12, 12, 6), its localisation 0.25 and 0.46 mm worst, 47 and 67 um "
+    "median. Read the worst-case bounds as their order, the medians as firmer; the crosstalk column says how "
+    "nearly the normal force and the shear are confounded at the map's worst point."
+)
+UNITS = {
+    "force_resolution_normal": "N",
+    "force_resolution_shear": "N",
+    "localisation_worst": "m",
+    "localisation_median": "m",
+    "crosstalk": "1",
+    "background_force_error": "N",
+    "saturation_ratio": "1",
+}
+SWEEP_HEADERS = [
+    "pitch (mm)",
+    "thickness (mm)",
+    "normal force (mN)",
+    "shear force (mN)",
+    "localisation worst (um)",
+    "localisation median (um)",
+    "crosstalk",
+    "Earth's field (N)",
+    "saturation ratio",
+]
+
+
+def sweep_cells(row) -> list:
+    """One row of the sweep's table in the headers' units: value +- first-order spread where computed."""
+
+    def cell(name, scale):
+        spread = "" if row["sigma"] is None else f" +- {row['sigma'][name]['total'] / scale:.2g}"
+        return f"{row[name] / scale:.3g}{spread}"
+
+    return [
+        row["pitch"] / mm,
+        row["thickness"] / mm,
+        cell("force_resolution_normal", mN),
+        cell("force_resolution_shear", mN),
+        cell("localisation_worst", 1e-6),
+        cell("localisation_median", 1e-6),
+        row["crosstalk"],
+        cell("background_force_error", 1.0),
+        cell("saturation_ratio", 1.0),
+    ]
+
+
+def comparison_rows(base, pitch, contact_radius) -> list[dict]:
+    """The report's first table: the paper's figures beside the model's bounds at 0.1 N."""
+    detect = DETECTION_SIGMAS * base["force_resolution_normal"]
+    bound = "a Cramer-Rao bound: a floor for any unbiased reader of these chips, with the assumed noise and J0 (it scales as noise / J0)"
+    return [
+        {
+            "quantity": "smallest detected normal force",
+            "published": "0.1 N",
+            "source": "summary",
+            "magdesign": f"{detect * 1e3:.3g} mN ({DETECTION_SIGMAS:g} sigma of Fn, worst over the map, at 0.1 N)",
+            "difference": f"x{detect / DETECTED_FORCE:.2g}",
+            "why": f"{bound}; the paper's 0.1 N is what its learned model resolved, with drift, hysteresis and the chips' real noise in it",
+        },
+        {
+            "quantity": "contact localisation",
+            "published": "about 1 mm",
+            "source": "summary",
+            "magdesign": f"{base['localisation_worst'] / 1e-6:.3g} um worst, {base['localisation_median'] / 1e-6:.3g} um median (at 0.1 N)",
+            "difference": f"x{base['localisation_worst'] / LOCALISATION:.2g} (worst)",
+            "why": f"{bound}; the paper's 1 mm is a learned model's test-set error over its probes and forces, its model error included",
+        },
+        {
+            "quantity": "skin thickness",
+            "published": "2-3 mm",
+            "source": "summary",
+            "magdesign": f"{THICKNESS / mm:g} mm (swept 1.5-3 mm)",
+            "difference": "within",
+            "why": "the thinner end is assumed; the sweep's table covers the range",
+        },
+        {
+            "quantity": "chips",
+            "published": "5 MLX90393",
+            "source": "summary; the board's pick-and-place file",
+            "magdesign": f"5 MLX90393 in a cross at {pitch / mm:.3g} mm pitch",
+            "difference": "none",
+            "why": "read from the board's files (the example spec's 10 mm cross is not the board's)",
+        },
+        {
+            "quantity": "normal / shear force resolution (1 sigma)",
+            "published": "not stated",
+            "source": "-",
+            "magdesign": f"{base['force_resolution_normal'] * 1e3:.3g} / {base['force_resolution_shear'] * 1e3:.3g} mN",
+            "difference": "-",
+            "why": "the paper reports a learned model's errors, not a noise-equivalent force",
+        },
+        {
+            "quantity": "Earth's field as a normal-force error",
+            "published": "not stated",
+            "source": "-",
+            "magdesign": f"{base['background_force_error']:.3g} N per 50 uT",
+            "difference": "-",
+            "why": "a learned model trained on one place's field absorbs it as an offset; turned or moved, the skin reads it as force",
+        },
+        {
+            "quantity": "Hertz contact radius at 0.1 N",
+            "published": "not stated",
+            "source": "-",
+            "magdesign": f"{contact_radius / mm:.3g} mm",
+            "difference": "-",
+            "why": "the assumed sphere and modulus",
+        },
+    ]
+
+
+def figure(report, rows) -> None:
+    """The normal-force bound against thickness, one line per pitch (only with --plot)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axis = plt.subplots(figsize=(6.0, 3.6))
+    for pitch in sorted({row["pitch"] for row in rows}):
+        mine = [row for row in rows if row["pitch"] == pitch]
+        axis.plot(
+            [r["thickness"] / mm for r in mine],
+            [r["force_resolution_normal"] / mN for r in mine],
+            marker="o",
+            label=f"{pitch / mm:g} mm",
+        )
+    axis.set_xlabel("skin thickness (mm)")
+    axis.set_ylabel("normal-force bound (mN)")
+    axis.legend(title="pitch", fontsize=8)
+    report.figure(
+        fig,
+        "sweep.png",
+        "The normal-force bound at 0.1 N against the skin's thickness, per chip pitch "
+        "(the table gives the tolerances' spreads)",
+    )
+
+
+if __name__ == "__main__":
+    main()
