@@ -36,6 +36,7 @@ def solved():
     return truth, wide, inversion
 
 
+@pytest.mark.slow
 def test_noise_free_readings_give_the_displacement_to_1um(solved):
     truth, _, inversion = solved
     assert inversion.displacement.shape == (3, 125, 3)
