@@ -60,6 +60,7 @@ def test_buckled_dome_default_mesh_carries_its_several_percent():
     assert float(estimate.error) > 0.03 * float(estimate.value)
 
 
+@pytest.mark.slow  # the reference fixture compiles the two reference meshes: a minute
 def test_rtol_picks_a_level_that_meets_it_against_the_fine_mesh(reference):
     rtol = 1e-2
     estimate = _compliance("dome-Hall", rtol=rtol, estimate=True)
