@@ -197,21 +197,31 @@ def test_axisymmetric_gradients_equal_central_differences():
         assert float(g) == pytest.approx(_central_difference(compliance, args, i), rel=1e-5)
 
 
+@functools.cache
+def _compliance_derivatives():
+    """(first, second): jitted forward-mode Jacobian and forward-over-forward Hessian of the
+    resin dome's compliance in (outer radius, thickness, held force), compiled once for the
+    tests of the radius and the held force below."""
+
+    def c(radius, thickness, force):
+        return dome_compliance(outer_radius=radius, thickness=thickness, material=RESIN, max_force=force)
+
+    argnums = (0, 1, 2)
+    return jax.jit(jax.jacfwd(c, argnums)), jax.jit(jax.jacfwd(jax.jacfwd(c, argnums), argnums))
+
+
 @pytest.mark.slow
 def test_axisymmetric_second_derivatives_equal_differences_of_the_first():
     # forward over forward, as the design solver's Hessians take it: the implicit JVP
     # differentiated once more, in the thickness and the radius (mixed: a sweep over the
-    # radius differentiates the design in both)
-    def c(radius, thickness):
-        return dome_compliance(outer_radius=radius, thickness=thickness, material=RESIN, max_force=5.0)
-
-    args = (8e-3, 2e-3)
-    first = jax.jit(jax.jacfwd(c, argnums=(0, 1)))
-    second = np.array(jax.jit(jax.jacfwd(jax.jacfwd(c, argnums=(0, 1)), argnums=(0, 1)))(*args))
+    # radius differentiates the design in both), at a held force of 5 N
+    jacobian, hessian = _compliance_derivatives()
+    args = (8e-3, 2e-3, 5.0)
+    second = np.array(hessian(*args))
     assert np.all(np.isfinite(second))
     for j in range(2):
         for i in range(2):
-            difference = _central_difference(lambda *a: first(*a)[j], args, i, 1e-4)
+            difference = _central_difference(lambda *a: jacobian(*a)[j], args, i, 1e-4)
             assert second[j, i] == pytest.approx(difference, rel=1e-5)
 
 
@@ -221,17 +231,22 @@ def test_axisymmetric_second_derivatives_in_the_held_value_equal_differences_of_
     # the held force (dome_compliance) or travel (dome_curve) and the thickness, mixed:
     # the second-order rule's rows of the held travel (the held value's own second
     # tangent is zero here; test_dome_tangent.py checks that term)
-    def output(thickness, value):
-        if control == "force":
-            return dome_compliance(outer_radius=8e-3, thickness=thickness, material=RESIN, max_force=value)
-        curve = dome_curve(
-            outer_radius=8e-3, thickness=thickness, material=RESIN, travels=jnp.stack([value]), estimate=False
-        )
-        return curve.force[0]
-
     args = (2e-3, 3.0 if control == "force" else 1.2e-3)
-    first = jax.jit(jax.jacfwd(output, argnums=(0, 1)))
-    second = np.array(jax.jit(jax.jacfwd(jax.jacfwd(output, argnums=(0, 1)), argnums=(0, 1)))(*args))
+    if control == "force":
+        # the compliance's derivatives in (thickness, force) at the radius 8 mm
+        jacobian, hessian = _compliance_derivatives()
+        first = lambda *a: jacobian(8e-3, *a)[1:]  # noqa: E731
+        second = np.array(hessian(8e-3, *args))[1:, 1:]
+    else:
+
+        def output(thickness, value):
+            curve = dome_curve(
+                outer_radius=8e-3, thickness=thickness, material=RESIN, travels=jnp.stack([value]), estimate=False
+            )
+            return curve.force[0]
+
+        first = jax.jit(jax.jacfwd(output, argnums=(0, 1)))
+        second = np.array(jax.jit(jax.jacfwd(jax.jacfwd(output, argnums=(0, 1)), argnums=(0, 1)))(*args))
     assert np.all(np.isfinite(second))
     for j in range(2):
         for i in range(2):
