@@ -277,6 +277,7 @@ def test_no_nan_in_values_or_gradients(sides):
     assert all(np.all(np.isfinite(np.asarray(g))) for g in _gradients(padded, np.asarray(sides, float), J))
 
 
+@pytest.mark.slow  # compiles the field's forward Jacobians and reverse gradients in the points and sides
 def test_derivatives_match_finite_differences():
     """Forward mode (points, dimension) and reverse mode against central differences."""
     rng = np.random.default_rng(8)
