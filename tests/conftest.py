@@ -46,11 +46,6 @@ def _drop_compiled_programs_before_the_mapping_limit():
         jax.clear_caches()
 
 
-# Whole modules in the slow tier (`make test-all`): each runs studies, builds the site's
-# code blocks or installs the wheel, minutes apiece. Single slow tests carry the marker.
-SLOW_MODULES = ("tests/studies/", "tests/test_docs.py", "tests/test_installed.py")
-
-
 # Modules that take minutes of one worker, run first: with `-n 2 --dist loadscope` (the
 # Makefile) each module runs on one worker, so that its module fixtures (a study's run, a
 # compiled program) run once, and a long module started last would leave the other worker idle.
@@ -61,7 +56,4 @@ LONG_MODULES = ("tests/test_cli.py", "tests/studies/", "tests/test_docs.py", "te
 def pytest_collection_modifyitems(config, items):
     root = Path(__file__).resolve().parent.parent
     modules = {id(item): Path(item.fspath).resolve().relative_to(root).as_posix() for item in items}
-    for item in items:
-        if modules[id(item)].startswith(SLOW_MODULES):
-            item.add_marker(pytest.mark.slow)
     items.sort(key=lambda item: not modules[id(item)].startswith(LONG_MODULES))

@@ -16,6 +16,7 @@ def rows():
     return accuracy.measure_layer() + accuracy.measure_area_averaging()
 
 
+@pytest.mark.slow
 def test_rows_carry_error_and_time_and_the_reference_level_is_exact(rows):
     assert [row.fidelity for row in rows] == ["bonded", "hooke", "n=1", "n=4", "n=16", "n=64"]
     assert all(row.seconds > 0 and row.error >= 0 for row in rows)

@@ -16,6 +16,7 @@ from magdesign.cli import main
 EXAMPLES = Path(__file__).parents[1] / "examples"
 
 
+@pytest.mark.slow
 def test_solve_default_prints_the_json_contract(capsys, tmp_path):
     """The default (--fidelity auto): solved with the Reissner dome, confirmed with the
     axisymmetric one; both answers, with their levels, units and the objective's value.
@@ -48,6 +49,7 @@ def test_solve_default_prints_the_json_contract(capsys, tmp_path):
         assert simulated[name] == pytest.approx(entry["achieved"], rel=1e-9, abs=0), name
 
 
+@pytest.mark.slow
 def test_solve_table_and_plot(capsys, tmp_path):
     """The report says what was designed (name, magnet, mechanics, chip) above the table,
     names the objective, and gives the total time; --write writes the answer, which
@@ -112,6 +114,7 @@ def test_infeasible_design_exits_3_and_names_the_target(capsys, tmp_path):
         ('effects = ["saturation", "quantisation"]', 'effects = ["saturation", "gremlins"]', "scene.effects"),
     ],
 )
+@pytest.mark.slow
 def test_bad_spec_exits_2_with_one_line_naming_the_key(tmp_path, old, new, key):
     text = (EXAMPLES / "dome_hall.toml").read_text()
     assert old in text
@@ -128,9 +131,10 @@ def test_missing_spec_file_exits_2(capsys):
     assert "no/such/spec.toml" in capsys.readouterr().err
 
 
-# Examples whose simulation compiles for half a minute and more: the skin's outputs take the
-# Jacobian of every reading through the layer's transforms.
-SLOW_EXAMPLES = ("skin.toml",)
+# Examples whose simulation compiles for half a minute and more: the pole plate's soft rod is
+# solved by the method of moments (400 cells), the skin's outputs take the Jacobian of every
+# reading through the layer's transforms.
+SLOW_EXAMPLES = ("pole_plate.toml", "skin.toml")
 
 
 @pytest.mark.parametrize(
@@ -145,6 +149,7 @@ def test_every_example_simulates(example, capsys):
     assert json.loads(capsys.readouterr().out)
 
 
+@pytest.mark.slow
 def test_the_command_keeps_compiled_programs_in_its_cache_folder(tmp_path):
     """The solver's own program among them: JAX keeps no program that calls back to Python
     (a runtime error check does, as lineax's checks of a solve), and a cache
@@ -185,6 +190,7 @@ def test_the_command_keeps_compiled_programs_in_its_cache_folder(tmp_path):
     assert not off.exists()
 
 
+@pytest.mark.slow
 def test_simulate_flags_load_points_where_the_dome_did_not_converge(tmp_path, capsys):
     """A 1 mm dome at axisymmetric fidelity pressed with up to 50 N, more than it carries before
     its wall is pressed flat (it passes its snap near 2.4 N): exit 3, a warning, and the
@@ -206,6 +212,7 @@ def test_simulate_flags_load_points_where_the_dome_did_not_converge(tmp_path, ca
     assert converged[0] and not converged[-1]
 
 
+@pytest.mark.slow
 def test_show_writes_a_picture(capsys, tmp_path):
     plot = tmp_path / "sensor.png"
     assert main(["show", str(EXAMPLES / "spin_valve_matrix.toml"), "--plot", str(plot)]) == 0

@@ -26,6 +26,7 @@ def one_percent():
     return code, json.loads(out)
 
 
+@pytest.mark.slow
 def test_one_percent_raises_the_dome(one_percent):
     """Reissner's dome is some 8 % off the axisymmetric one here: 1 % takes the finite-strain
     dome, and the answer keeps the public JSON keys."""
@@ -40,6 +41,7 @@ def test_one_percent_raises_the_dome(one_percent):
     assert compliance["absolute"] <= 0.01 * document["targets"]["compliance"]["target"]
 
 
+@pytest.mark.slow
 def test_estimate_bounds_a_much_finer_mesh(one_percent):
     """The compliance's estimate at the answer bounds its difference to a dome meshed 9
     times finer (6 x 48 elements), solved here."""
@@ -59,6 +61,7 @@ def test_loose_accuracy_stays_at_the_cheapest_level():
     assert document["estimates"]["compliance"]["relative"] > 0.01  # Reissner's error, within 50 %
 
 
+@pytest.mark.slow  # climbs the dome's ladder to its 2x16 mesh: compiles each level's design solve
 def test_impossible_accuracy_is_not_reached(monkeypatch, capsys):
     """With the dome's ladder cut at the 2x16 mesh, 1e-9 cannot be reached: exit 3, the
     reason on stderr and in the report."""

@@ -42,6 +42,7 @@ def test_stage_lines_go_to_stderr_only_when_turned_on(capsys):
     assert captured.err.splitlines() == ["magdesign sweep: solving 15 points ...", "magdesign sweep: wrote points.csv"]
 
 
+@pytest.mark.slow
 def test_show_says_what_it_writes_and_quiet_silences_it(tmp_path, capsys):
     picture = tmp_path / "sensor.png"
     assert main(["show", str(EXAMPLES / "dome_hall.toml"), "--plot", str(picture)]) == 0
@@ -112,6 +113,7 @@ def test_more_devices_than_cores_is_refused_at_once():
     assert "--devices 1000" in line and f"1 to {len(os.sched_getaffinity(0))}" in line
 
 
+@pytest.mark.slow
 def test_a_closed_or_full_stdout_is_one_line_and_its_exit_code(tmp_path):
     """The reader gone (``| head -1``, ``| true``): exit 141, as a shell reports a writer
     killed by SIGPIPE; a full disk (/dev/full): exit 1. An error with --json whose stdout
@@ -137,6 +139,7 @@ def test_a_closed_or_full_stdout_is_one_line_and_its_exit_code(tmp_path):
     assert "none.toml" in one_line(missing.stderr.read().decode()) and missing.wait(timeout=120) == 2
 
 
+@pytest.mark.slow
 def test_a_sweep_on_a_pipe_says_its_stages_and_ctrl_c_stops_it_in_one_line(tmp_path):
     """On a pipe (no terminal) a sweep prints a line per stage and no bar, and --quiet none;
     Ctrl-C during a long sweep: one line "interrupted", exit 130, no CSV file."""

@@ -111,7 +111,25 @@ def check_output(expected, output):
         at += 1
 
 
-@pytest.mark.parametrize("page", PAGES, ids=lambda page: page.relative_to(ROOT).as_posix())
+def runs_the_library(page):
+    """Whether a block of the page runs Python or a magdesign command (each compiles its
+    programs in a new process: seconds to a minute a page), not only specs and ``make -n``."""
+    return any(
+        language == "python" or any(words[0] != "make" for words, _ in commands(body))
+        for language, body, skip, _ in blocks(page.read_text())
+        if not skip and language in ("python", "sh")
+    )
+
+
+@pytest.mark.parametrize(
+    "page",
+    [
+        pytest.param(
+            page, id=page.relative_to(ROOT).as_posix(), marks=pytest.mark.slow if runs_the_library(page) else ()
+        )
+        for page in PAGES
+    ],
+)
 def test_code_blocks(page, tmp_path):
     text = page.read_text()
     (tmp_path / "examples").symlink_to(ROOT / "examples")

@@ -52,6 +52,7 @@ def _solved(spec):
     return solve(problem_from_spec(spec, fidelity="reissner")[0])
 
 
+@pytest.mark.slow
 def test_specs_that_differ_in_numbers_share_one_entry_and_keep_their_own_answers(kept):
     first, other = _spec(), _spec(compliance="0.3 mm/N", remanence="1.25 T", c10="0.13 MPa")
     exported = [_solved(first)]
@@ -71,6 +72,7 @@ def test_specs_that_differ_in_numbers_share_one_entry_and_keep_their_own_answers
     assert exported[0].parameters["geometry.gap"] != exported[1].parameters["geometry.gap"]
 
 
+@pytest.mark.slow
 def test_a_structural_change_makes_a_new_entry(kept):
     def lowered(spec):  # traced and exported, not compiled
         problem = problem_from_spec(spec, fidelity="reissner")[0]
@@ -143,6 +145,7 @@ def test_turned_off_by_the_environment(tmp_path, monkeypatch):
         _export.enable(saved)
 
 
+@pytest.mark.slow
 def test_the_command_keeps_its_programs_and_answers_the_same_from_them(tmp_path, monkeypatch, capsys):
     monkeypatch.delenv("MAGDESIGN_NO_EXPORT", raising=False)
     monkeypatch.setattr(cli, "export_directory", lambda directory: tmp_path / "exported")

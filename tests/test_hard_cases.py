@@ -73,6 +73,7 @@ UNIT_VECTORS = st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: sum(x * x for
     distance=st.floats(0.0, 1e6),
     polarization=UNIT_VECTORS,
 )
+@pytest.mark.slow
 def test_cylinder_values_and_jacobians_are_finite_everywhere(radius, log_aspect, direction, distance, polarization):
     aspect = 10.0**log_aspect
     direction = np.asarray(direction) / np.linalg.norm(direction)
@@ -89,6 +90,7 @@ REFERENCES = json.loads((Path(__file__).parent / "fields" / "references" / "cyli
 # exactly (near an edge a rounded point moves the field by more than 1e-12)
 @pytest.mark.parametrize("radius", [2.0**-20, 2.0**-10, 8.0])
 @pytest.mark.parametrize("aspect", ["1e-6", "1e-3", "20", "1000"])
+@pytest.mark.slow
 def test_thin_discs_and_long_rods_equal_40_digit_references_at_any_scale(radius, aspect):
     """Documented: relative error below 1e-12 outside (and inside) the magnet for height /
     radius 1e-6 to 1e3; the references (tests/fields/references) are in radii, any scale."""
@@ -198,6 +200,7 @@ FLOAT32_AXIS_RTOL = 1e-6
 
 
 @pytest.mark.parametrize("polarization", [1.17, (0.5, -0.3, 1.0)])
+@pytest.mark.slow
 def test_float32_cylinder_keeps_its_documented_tolerance(polarization, monkeypatch):
     """Axial, and with a diametral part (which until 2026-11-24 failed on float32 points:
     float64 constants met float32 values); in small calls and as one partitioned call."""
@@ -222,6 +225,7 @@ def test_float32_cylinder_keeps_its_documented_tolerance(polarization, monkeypat
     assert error.max() < FLOAT32_CYLINDER_RTOL
 
 
+@pytest.mark.slow
 def test_float32_thin_magnet_derivatives_and_traced_height_stay_float32():
     """A thin magnet's side-wall nodes and weights were numpy float64 and turned float32
     into float64 (a TypeError until 2026-11-24): its Jacobian along the points, its field

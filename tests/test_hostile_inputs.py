@@ -104,6 +104,7 @@ def sixteen_gigabytes(monkeypatch):
         ),
     ],
 )
+@pytest.mark.slow
 def test_a_size_that_cannot_fit_is_refused_at_load(tmp_path, capsys, sixteen_gigabytes, replacements, fragments):
     path = _spec(tmp_path, DOME, *replacements)
     for command in ("simulate", "solve"):

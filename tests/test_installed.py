@@ -16,6 +16,8 @@ import sys
 import tomllib
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 # The wheel's inputs, copied so that the build's own folders (build/, *.egg-info) stay out of
 # the checkout.
@@ -36,6 +38,7 @@ def _uv():
     return str(beside) if beside.is_file() else shutil.which("uv")
 
 
+@pytest.mark.slow  # builds the wheel and installs it with jaxlib in a new environment: about a minute
 def test_the_installed_wheel_runs_outside_the_source_tree(tmp_path):
     source = tmp_path / "source"
     source.mkdir()

@@ -10,6 +10,7 @@ import pytest
 from magdesign.design import Limit, Problem, Target, Variable, solve
 
 
+@pytest.mark.slow
 def test_the_subpackages_load_after_a_plain_import():
     """As the README writes it: ``import magdesign`` then ``magdesign.scene.to_magpylib``;
     magpylib itself (an optional extra) still loads only when the function is called."""
@@ -25,6 +26,7 @@ def test_the_subpackages_load_after_a_plain_import():
     assert "module 'magdesign' has no attribute 'nothing'" in missing.stderr
 
 
+@pytest.mark.slow
 def test_importing_every_module_starts_no_jax_backend():
     """JAX's device count can be set only before its backend starts (the CLI's --devices
     sets it after importing the package): no module may compute with JAX on import."""

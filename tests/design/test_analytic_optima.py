@@ -161,6 +161,7 @@ def closest_gap_problem(lower):
     )
 
 
+@pytest.mark.slow
 def test_e_limit_active_in_one_problem_inactive_in_another():
     for start in starts(3 * mm, 20 * mm):
         active = solve(closest_gap_problem(3 * mm), start={"gap": start})
@@ -186,6 +187,7 @@ def default_expected(compliance=COMPLIANCE, saturation=SATURATION):
     return {"gap": closest + compliance * FORCE, "thickness": library_thickness_at(compliance), "closest_gap": closest}
 
 
+@pytest.mark.slow
 def test_default_design_reissner_closed_form():
     problem = default_problem_here()
     expected = default_expected()
@@ -214,6 +216,7 @@ def test_default_design_reissner_closed_form():
     assert document["targets"]["compliance"] == {"target": COMPLIANCE, "achieved": result.outputs["compliance"]}
 
 
+@pytest.mark.slow
 def test_infeasible_compliance_names_the_target():
     problem = default_problem_here(thickness_bounds=(5 * mm, 6 * mm))
     for start in [(4 * mm, 5 * mm), (20 * mm, 6 * mm), (10 * mm, 5.5 * mm)]:
@@ -224,6 +227,7 @@ def test_infeasible_compliance_names_the_target():
         assert "not met: compliance" in result.table()
 
 
+@pytest.mark.slow
 def test_random_starts_reach_the_optimum_or_report_failure():
     problem = default_problem_here()
     rng = np.random.default_rng(5)

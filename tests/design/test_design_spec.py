@@ -31,6 +31,7 @@ def test_example_dome_hall_spells_out_the_default_design():
 
 
 @pytest.mark.parametrize("fidelity, rtol", [("reissner", 1e-9), ("axisymmetric", 1e-6)])
+@pytest.mark.slow
 def test_default_design_meets_its_closed_form_answer(fidelity, rtol):
     """The dome-Hall default at every dome level: the closest approach is where the on-axis field is
     4.8 mT (5.8458 mm), the rest gap 1.6 mm further (0.32 mm/N x 5 N); only the wall
@@ -148,6 +149,7 @@ def test_a_variable_starts_at_the_value_the_scene_states():
         problem_from_spec(spec)
 
 
+@pytest.mark.slow
 def test_a_start_remains_for_a_parameter_the_scene_does_not_state():
     """pole.length is not written in examples/pole_plate.toml (the rod runs through the
     whole 4 mm ball by default): a variable on it starts at its start, else mid-bounds."""
@@ -283,6 +285,7 @@ def test_the_saturation_guard_joins_every_design_on_a_chip_with_a_range():
     assert float(_limits(spec)["saturation_ratio"].upper) == 1.0
 
 
+@pytest.mark.slow
 def test_a_design_that_would_saturate_its_chip_is_not_successful():
     """The default design maximizes its sensitivity, which brings the magnet as close as the
     chip allows: with the guard alone it stops where the on-axis field at the closest
@@ -305,6 +308,7 @@ def test_a_design_that_would_saturate_its_chip_is_not_successful():
     assert "the chip clips" in result.table()
 
 
+@pytest.mark.slow
 def test_a_spec_that_relaxes_the_saturation_guard_solves_and_reports_the_clipping():
     """saturation_ratio <= 1.5: the optimum lets the chip's largest reading (the z axis at
     the closest approach, on the axis) reach 1.5 x 4.8 mT = 7.2 mT, and the table says the
@@ -318,6 +322,7 @@ def test_a_spec_that_relaxes_the_saturation_guard_solves_and_reports_the_clippin
     assert "the chip clips: its largest reading is 1.5 times its range" in result.table()
 
 
+@pytest.mark.slow
 def test_the_smallest_dome_carries_its_magnet_at_its_apex():
     """examples/dome_radius.toml: the smallest dome whose apex carries the magnet (embed =
     outer radius - gap >= 0) and keeps the AK8963 in range: the radius and the gap meet at
@@ -331,6 +336,7 @@ def test_the_smallest_dome_carries_its_magnet_at_its_apex():
     assert result.limits["embed"]["active"] and result.limits["saturation_ratio"]["active"]
 
 
+@pytest.mark.slow
 def test_a_layer_design_never_floats_its_magnet_above_the_layer():
     """The spin-valve matrix asked for a weak in-plane field (0.5 mT) that only a magnet
     above its 3.5 mm layer would give: not successful, and the gap stays on the layer."""
@@ -344,6 +350,7 @@ def test_a_layer_design_never_floats_its_magnet_above_the_layer():
     assert "inplane_field_max" in result.violated
 
 
+@pytest.mark.slow
 def test_a_dome_design_never_hangs_its_magnet_in_the_cavity():
     """A weak magnet (0.1 T) whose gap is free, the wall held at 2 mm and no compliance
     target: the sensitivity grows as the magnet nears the chip, so the optimum sits where

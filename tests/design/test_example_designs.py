@@ -50,6 +50,7 @@ def test_the_examples_include_designs_of_every_named_parameter():
 
 
 @pytest.mark.parametrize("name", DESIGNS)
+@pytest.mark.slow
 def test_random_starts_reach_the_optimum_or_say_not(name, solved):
     problem, reference = solved(name)
     assert reference.status == "successful"
@@ -65,6 +66,7 @@ def test_random_starts_reach_the_optimum_or_say_not(name, solved):
 
 
 @pytest.mark.parametrize("name", DESIGNS)
+@pytest.mark.slow
 def test_the_written_answer_simulates_the_design_reported(name, solved, tmp_path, capsys):
     """solve -> write_spec -> simulate: the written spec's scene holds the answer (its
     variables start there, no `start` left), and its simulation gives every target and

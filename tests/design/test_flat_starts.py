@@ -12,6 +12,7 @@ def bowl(values):
 
 
 @pytest.mark.parametrize("names", [("x",), ("x", "z")])
+@pytest.mark.slow
 def test_target_from_the_symmetric_centre(names):
     problem = Problem(bowl, [Variable(name, 0.0, 1.0, start=0.5) for name in names], targets=[Target("y", 0.04)])
     result = solve(problem)
@@ -40,6 +41,7 @@ def test_maximum_from_the_bottom_of_the_bowl():
         (lambda v: (v["x"] - 0.3) ** 2, 0.3 + 1e-12, 0.3),
     ],
 )
+@pytest.mark.slow
 def test_a_start_at_or_next_to_a_stationary_point(objective, start, expected):
     problem = Problem(lambda v: {"f": objective(v)}, [Variable("x", -1.0, 1.0)], objective=Objective("f", "min"))
     result = solve(problem, start={"x": start})

@@ -136,6 +136,7 @@ def test_solve_and_simulate_agree(name):
 
 
 @pytest.mark.parametrize("name", ["dome_hall", "film_hall", "spin_valve_matrix"])
+@pytest.mark.slow
 def test_solve_and_simulate_agree_with_effects_on(name):
     spec = load_spec(EXAMPLES / f"{name}.toml")
     plain = solve(problem_from_spec(spec)[0])

@@ -45,6 +45,7 @@ def test_where_needed_under_vmap_computes_only_the_needed_lanes():
 
 
 @pytest.mark.parametrize("objective", [True, False])
+@pytest.mark.slow
 def test_polish_equations_and_their_derivatives_match_plain_forward_mode(objective):
     """A model with curvature in both variables and a fixed input (theta) inside it, with
     one variable on a bound, one limit row held and one not: the KKT equations (with an
@@ -118,6 +119,7 @@ def _r2_problem(model=None):
     )
 
 
+@pytest.mark.slow
 def test_polish_ends_with_the_residual_and_jet_of_the_point_it_returns():
     """The solver's one loop evaluates the model at the point the search tries, then at
     Newton's iterates, and the polish keeps the residual and the jet (which the implicit
@@ -157,6 +159,7 @@ def test_polish_ends_with_the_residual_and_jet_of_the_point_it_returns():
 
 
 @pytest.mark.parametrize("objective", [True, False])
+@pytest.mark.slow
 def test_the_model_is_evaluated_once_a_trip_and_the_polish_starts_from_the_search_jet(objective):
     """Counted by a callback in the model: the search evaluates it once per step, and the
     polish, whose first Newton step is taken from the search's last jet, once per further
@@ -188,6 +191,7 @@ def test_the_model_is_evaluated_once_a_trip_and_the_polish_starts_from_the_searc
     assert solve(problem).status == "successful"
 
 
+@pytest.mark.slow
 def test_lanes_of_a_batch_that_end_on_different_trips_equal_their_own_solves():
     """The solver's loop under vmap: lanes whose search and polish end on different trips
     (different starts and targets), and one where the model is NaN from the start (its
@@ -229,6 +233,7 @@ def test_lanes_of_a_batch_that_end_on_different_trips_equal_their_own_solves():
     np.testing.assert_array_equal(loop.polish.evaluated[:2], starts[3])
 
 
+@pytest.mark.slow
 def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
     """The default design at outer radius 6 mm and compliance 0.2545 mm/N: its field limit
     and closest-gap limit rows are parallel at the start. A dropped row's multiplier of 1e-10
@@ -257,6 +262,7 @@ def test_first_qp_with_parallel_limit_rows_needs_no_interior_point_iterations():
         np.testing.assert_allclose(guessed.z, reference.z, rtol=1e-6, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_active_set_rounds_with_simple_bounds_match_the_closed_form():
     """minimise (w0 - 2)^2 + (w1 + 3)^2 + (w2 - 2)^2 subject to w0 + w2 = 1.5,
     w0 / 2 - w1 + w2 <= 1.5 and the box [-1, 1]^3, the box given as simple bounds
@@ -362,6 +368,7 @@ def test_polish_linear_solver_transposes_for_reverse_mode():
 
 
 @pytest.mark.parametrize("objective", [Objective("f", "min"), None])
+@pytest.mark.slow
 def test_the_model_is_traced_once_for_a_solve_and_a_sweep(objective):
     """The search, the polish (its Newton steps, optimistix's shape checks, the implicit
     derivatives in theta) and a batch all use the model or its derivatives: JAX transforms
@@ -401,6 +408,7 @@ def _raising_problem(check):
 
 
 @pytest.mark.parametrize("solve_first", [False, True])
+@pytest.mark.slow
 def test_a_model_traced_outside_the_solver_keeps_raising_its_errors_and_inside_gives_a_status(solve_first):
     """The solver traces the library's checks (``checked``, as a saturating soft part's)
     as NaN, reported as a status; a plain call raises; neither reuses the other's trace,
@@ -424,6 +432,7 @@ def test_a_models_own_runtime_error_reaches_the_user():
 
 
 @pytest.mark.parametrize("fixed_input", [True, False])
+@pytest.mark.slow
 def test_implicit_derivatives_from_the_polished_jet_match_the_closed_form(fixed_input):
     """The optimum's derivatives, from the polish's last jet (in the variables) and the
     rows' dependence on theta (through the model where it has a fixed input).
@@ -462,6 +471,7 @@ def test_implicit_derivatives_from_the_polished_jet_match_the_closed_form(fixed_
             assert result.derivatives[key][name] == pytest.approx(value, rel=1e-9), (key, name)
 
 
+@pytest.mark.slow
 def test_the_solver_takes_its_thresholds_from_the_sqp_it_is_given():
     """min (x - 0.5)^2 - (y - 0.5)^2 on [0, 1]^2 from (0.8, 0.5): the gradient has no y
     part on the line y = 0.5, so the steps reach the saddle (0.5, 0.5) (curvature -2 along

@@ -92,6 +92,7 @@ def product_problem():
     )
 
 
+@pytest.mark.slow
 def test_grid_shape_and_closed_form_with_derivatives():
     targets, factors = np.array([1.0, 2.0, 3.0]), np.array([0.5, 2.0, 4.0, 8.0])
     result = sweep(product_problem(), {"y": targets, "a": factors})
@@ -124,6 +125,7 @@ def test_a_failed_point_leaves_the_derivatives_of_the_others():
     assert np.isnan(result.derivatives["y"]["x"][2]) and np.isnan(result.derivatives["a"]["x"][2])
 
 
+@pytest.mark.slow
 def test_list_of_points_and_small_chunks_agree_with_one_batch():
     points = {"y": np.linspace(0.5, 3.0, 7), "a": np.linspace(1.0, 7.0, 7)}
     listed = sweep(product_problem(), points, grid=False)
@@ -134,6 +136,7 @@ def test_list_of_points_and_small_chunks_agree_with_one_batch():
     assert list(chunked.status) == list(listed.status)
 
 
+@pytest.mark.slow
 def test_a_sweep_of_a_few_points_moves_its_bar_per_point_with_the_answers_of_one_batch(cheap_spec, monkeypatch):
     """15 points go in chunks of one (the bar moves 15 times, not once at the end), and each
     point's answer is, bit for bit, the one it gets in a batch of 16 lanes (the same 15
@@ -193,6 +196,7 @@ def cubic_problem():
 
 
 @pytest.mark.skipif(jax.default_backend() != "cpu", reason="models with loops go a point at a time on a CPU only")
+@pytest.mark.slow
 def test_a_sweep_a_point_at_a_time_moves_its_bar_per_point_and_stops_soon_when_interrupted(monkeypatch):
     """40 points a point at a time (runs of SQP.chain on threads): the bar moves by one
     point 40 times; Ctrl-C (a KeyboardInterrupt, here raised by the bar at its 3rd move)
@@ -241,6 +245,7 @@ def test_a_sweep_a_point_at_a_time_moves_its_bar_per_point_and_stops_soon_when_i
 
 @pytest.mark.skipif(jax.default_backend() != "cpu", reason="models with loops go a point at a time on a CPU only")
 @pytest.mark.parametrize("slow", [True, False])
+@pytest.mark.slow
 def test_a_model_with_loops_is_swept_a_point_at_a_time_where_a_point_is_slow(monkeypatch, slow):
     """Vmapped lanes of a loop wait for the slowest lane, so a model with loops of its own
     whose point takes longer than SQP.point_seconds (here made 0 or infinite) is swept a
@@ -321,6 +326,7 @@ def test_bad_keys_name_the_key():
         sweep(problem, {"y": [1.0, 2.0], "a": [1.0]}, grid=False)
 
 
+@pytest.mark.slow
 def test_scene_parameter_sweep_against_the_closed_form(cheap_spec):
     problem, _ = problem_from_spec(load_spec(cheap_spec))
     remanences = np.linspace(1.0, 1.4, 5)
@@ -337,6 +343,7 @@ def test_scene_parameter_sweep_against_the_closed_form(cheap_spec):
             assert result.derivatives["magnet.remanence"]["geometry.gap"][i, j] == pytest.approx(expected, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_default_design_over_the_dome_radius_matches_single_solves_and_finite_differences():
     spec = default_spec()
     problem, _ = problem_from_spec(spec)

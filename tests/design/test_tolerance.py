@@ -99,6 +99,7 @@ def test_first_order_sensitivities_match_the_monte_carlo_in_a_linear_case(gaussi
     assert "closest_gap" not in result.sensitivities
 
 
+@pytest.mark.slow
 def test_effect_tolerances_move_the_scene_effects():
     """A sample's placement, tilt and temperature are the scene's own effects: the
     perturbed scene's outputs equal those of a scene spec that lists the effects."""

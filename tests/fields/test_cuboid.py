@@ -221,6 +221,7 @@ def jacobians(points, sides=SIDES, polarization=J):
 
 
 @pytest.mark.parametrize("sides", [(2e-3, 3e-3, 1e-3), (1e-3, 1e-3, 1e-9), (1e-3, 1e-3, 1.0)])
+@pytest.mark.slow
 def test_divergence_and_curl_vanish_outside(sides):
     """By jax derivatives (jacfwd), for a block, a flat one (1e-6) and a long one (1e3)."""
     sides = np.array(sides)
@@ -264,6 +265,7 @@ def _hard_points(sides):
 @pytest.mark.parametrize(
     "sides", [(2e-3, 3e-3, 1e-3), (1e-3, 1e-3, 1e-9), (1e-6, 1e-3, 1e-3), (1e-3, 1e-3, 1.0), (1e-6, 1e-6, 1e-3)]
 )
+@pytest.mark.slow
 def test_no_nan_in_values_or_gradients(sides):
     """Faces, edges, corners, an edge's extension, 1e3 sizes away, flat (1e-6) and long
     (1e3) blocks: finite values and finite derivatives with respect to the points, the
@@ -275,6 +277,7 @@ def test_no_nan_in_values_or_gradients(sides):
     assert all(np.all(np.isfinite(np.asarray(g))) for g in _gradients(padded, np.asarray(sides, float), J))
 
 
+@pytest.mark.slow  # compiles the field's forward Jacobians and reverse gradients in the points and sides
 def test_derivatives_match_finite_differences():
     """Forward mode (points, dimension) and reverse mode against central differences."""
     rng = np.random.default_rng(8)
@@ -309,6 +312,7 @@ def test_symmetry_and_scale():
     )
 
 
+@pytest.mark.slow
 def test_batched_dimensions_and_vmap():
     """Cells of a method-of-moments grid: dimension and polarization (..., 3) broadcast."""
     rng = np.random.default_rng(10)

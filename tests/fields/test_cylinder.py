@@ -58,6 +58,7 @@ def _unit_magnet(points, radius, aspect, polarization):
 
 
 @pytest.mark.parametrize("aspect", ASPECTS)
+@pytest.mark.slow
 def test_equals_40_digit_references(aspect):
     """Thin discs (height / radius 1e-6) to long rods (1e3), on the axis, at faces, 1e-9
     radii from an edge, beside the wall, far away and inside: 1e-12 relative."""
@@ -91,6 +92,7 @@ def test_a_thin_disc_on_its_axis_keeps_its_digits():
 
 
 @pytest.mark.parametrize(("radius", "height"), [(1.5e-3, 1e-3), (2e-3, 4e-3), (1e-3, 0.4e-3)])
+@pytest.mark.slow
 def test_any_direction_agrees_with_magpylib(radius, height):
     """Axial plus diametral polarization, 1e-10 relative in a box of +-5 radii. Points
     within 0.1 radii of the axis are left out: there magpylib's diametral field switches
@@ -107,6 +109,7 @@ def test_any_direction_agrees_with_magpylib(radius, height):
     assert np.max(rel_err(ours, theirs)) < 1e-10
 
 
+@pytest.mark.slow
 def test_agrees_with_magpylib_in_the_near_box():
     rng = np.random.default_rng(1)
     points = rng.uniform(-10 * R, 10 * R, size=(10_000, 3))
@@ -169,6 +172,7 @@ def _divergence_and_curl(points, **params):
 
 @pytest.mark.parametrize("height", [D, 1e-6 * R, 1e3 * R])
 @pytest.mark.parametrize("polarization", [J, (0.4, -0.9, 0.7)])
+@pytest.mark.slow
 def test_divergence_and_curl_vanish_outside(height, polarization):
     """By jax derivatives (the closed-form derivatives of the custom JVP), for the dome-Hall
     magnet, a thin disc and a long rod, polarized along the axis or in any direction."""
@@ -276,6 +280,7 @@ HARD_POINTS = np.array(
 )
 
 
+@pytest.mark.slow
 def test_hard_cases_are_finite():
     # every hard point for magnets of radius 1 um and 10 cm, in one batch (few compilations)
     radii = np.repeat([1e-6, 0.1], len(HARD_POINTS))
@@ -387,6 +392,7 @@ def test_on_axis_derivatives_equal_their_closed_forms():
         )
 
 
+@pytest.mark.slow
 def test_jit_vmap_grad_agree_with_plain_evaluation():
     points = np.random.default_rng(6).uniform(-3 * R, 3 * R, size=(8, 3))
     plain = field(points)
@@ -424,6 +430,7 @@ def _fourth_order_difference(f, x, step):
 
 @pytest.mark.parametrize("aspect", [1e-3, 2 / 3, 100.0])
 @pytest.mark.parametrize("polarization", [1.3, (0.4, -0.7, 1.1)])
+@pytest.mark.slow
 def test_derivatives_match_finite_differences(aspect, polarization):
     """The closed-form derivatives (custom JVP) against 4th-order central differences of the
     values, with respect to the points (jacfwd and jacrev), the height, the radius and the
@@ -463,6 +470,7 @@ def test_derivatives_match_finite_differences(aspect, polarization):
             np.testing.assert_allclose(d_polarization, unit, rtol=1e-13, atol=1e-15 * scale)
 
 
+@pytest.mark.slow
 def test_second_derivatives_on_and_near_the_axis_are_finite_and_agree():
     """The design solver differentiates the field twice (sensors on the axis): the second
     derivatives there and 1e-7 radii off it are finite and continuous."""
@@ -541,6 +549,7 @@ def test_cylinder_on_axis_is_deprecated_and_unchanged():
         cylinder_on_axis(z_top, radius=R, height=D, polarization=J, remanence=J)
 
 
+@pytest.mark.slow
 def test_points_as_a_nested_list_holding_traced_values():
     """A list of [x, y, z] whose entries are traced (vmap over z) is read like an array."""
     field = jax.vmap(lambda z: cylinder([[0.0, 0.0, z]], radius=R, height=D, polarization=J))(jnp.array([2 * D, 3 * D]))

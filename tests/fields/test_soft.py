@@ -26,6 +26,7 @@ demagnetizing = jax.jit(soft.demagnetizing_tensor)
 solve = jax.jit(soft.magnetization)
 
 
+@pytest.mark.slow
 def test_the_cell_tensor_is_the_cuboid_field_for_each_direction_and_symmetric():
     """Consistency of the two entry points (cuboid is T J; its values are checked against
     references in test_cuboid.py) and the symmetry the moments system relies on."""
@@ -40,6 +41,7 @@ def test_the_cell_tensor_is_the_cuboid_field_for_each_direction_and_symmetric():
 
 
 @pytest.mark.parametrize("case", REFERENCES["prism_demag"]["cases"], ids=lambda c: "x".join(map(str, c["half_sides"])))
+@pytest.mark.slow
 def test_prism_demagnetizing_factors_against_aharoni(case):
     """A prism is filled exactly by its cells: only the collocation's error remains. Measured:
     below 2e-7 for the compact prisms at 16 cells, 2e-3 where a side gets one or two cells."""
@@ -57,6 +59,7 @@ def test_prism_demagnetizing_factors_against_aharoni(case):
 
 
 @pytest.mark.parametrize("case", REFERENCES["cylinder_demag"]["cases"][1:5], ids=lambda c: f"gamma{c['gamma']}")
+@pytest.mark.slow
 def test_cylinder_demagnetizing_factors_against_the_closed_form(case):
     """The staircase keeps the cylinder's volume; its factor converges like the cell size.
     Measured at 16 cells: 0.24-0.55 % for L / D from 0.25 to 2."""
@@ -81,6 +84,7 @@ def test_cylinder_demagnetizing_factors_against_the_closed_form(case):
 
 
 @pytest.mark.parametrize("permeability, tolerance", [(2.0, 4e-3), (10.0, 4e-2), (1000.0, 8e-2)])
+@pytest.mark.slow
 def test_sphere_in_a_uniform_field(permeability, tolerance):
     """M = 3 chi / (3 + chi) H0, uniform. The mean over the cells; measured at 12 cells:
     0.31 % (mu_r 2), 6.6 % (mu_r 1000: the high-permeability staircase converges slowly,
@@ -113,6 +117,7 @@ def _force(body, position):
     [c for c in REFERENCES["sphere_dipole"]["cases"] if c["d_over_a"] == 2.0],
     ids=lambda c: f"mu{c['mu_r']:g}-d{c['d_over_a']:g}",
 )
+@pytest.mark.slow
 def test_force_on_a_soft_sphere_beside_a_dipole(case):
     """The co-energy's gradient against the exact multipole series, on the dipole's axis and
     in its equatorial plane, centre two radii from the dipole. Measured at 12 cells: within
@@ -132,6 +137,7 @@ def test_force_on_a_soft_sphere_beside_a_dipole(case):
 @pytest.mark.parametrize(
     "case", [c for c in REFERENCES["sphere_dipole"]["cases"] if c["d_over_a"] == 2.0], ids=lambda c: f"mu{c['mu_r']:g}"
 )
+@pytest.mark.slow
 def test_induced_field_of_a_soft_sphere_beside_a_dipole(case):
     """The sphere's own field beyond it on the axis and beside it, against the series."""
     tolerance = 2e-2 if case["mu_r"] < 10 else 0.12

@@ -195,6 +195,7 @@ def test_reference_cylinder_factors_converge():
 
 
 @pytest.mark.parametrize("ratio", [0.5, 1.0, 2.0, 5.0])
+@pytest.mark.slow
 def test_cylinder_demagnetizing_factor_against_the_independent_reference(ratio, cylinder_references):
     """soft_surface.demagnetizing_factor at level 2 within 0.5 % of the reference (mu_r 10 and
     1000, along the axis), its error estimate above the difference. Measured: +0.05 % (length/
@@ -224,6 +225,7 @@ def end_charge_factor(ratio):
     return 2.0 / length * total
 
 
+@pytest.mark.slow
 def test_reference_cylinder_meets_the_end_charge_factor_as_chi_goes_to_zero():
     """mu_r 1.0001 (chi N_m ~ 3e-5: N_m within ~1e-5 of its chi = 0 value). Measured, against
     end_charge_factor: 80 panels +1.1e-3 (length/diameter 1) and +3.4e-3 (2); extrapolated

@@ -34,6 +34,7 @@ def _uniform(body, field):
         (2.0, 1.0, 2.0, 5e-4),  # weakly permeable, on the knee
     ],
 )
+@pytest.mark.slow
 def test_a_saturating_sphere_in_a_uniform_field(mu_r, saturation, applied, tolerance):
     """Against the scalar equation of the uniformly magnetised sphere. Measured at 8 cells:
     -0.79 %, -0.40 %, -0.016 % (the staircase sphere's error; where the body is saturated
@@ -51,6 +52,7 @@ def test_a_saturating_sphere_in_a_uniform_field(mu_r, saturation, applied, toler
     np.testing.assert_allclose(polarization[:, :2].mean(0), 0.0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_a_far_saturation_is_the_linear_body():
     body = soft.soft_body("cylinder", radius=0.5e-3, height=3e-3, cells=6, permeability=300.0)
     saturating = soft.soft_body("cylinder", radius=0.5e-3, height=3e-3, cells=6, permeability=300.0, saturation=1e6)
@@ -66,6 +68,7 @@ def _external(body, position):
     return dipole(body.centres + position, MOMENT)
 
 
+@pytest.mark.slow
 def test_the_coenergy_gradient_is_the_force_on_the_frozen_magnetisation():
     """Saturated Ni-Fe sphere beside a strong dipole: jax.grad of W' (through the
     nonlinear solve's implicit derivatives) against sum_i V (M_i . grad) B_ext(c_i) at the
@@ -112,6 +115,7 @@ SOURCE = jnp.array([0.3e-3, 0.2e-3, 1.5e-3])  # a dipole above the prism, off it
 
 @pytest.mark.parametrize("turn", [0.0, np.pi / 2], ids=["aligned", "turned"])
 @pytest.mark.parametrize("saturation", [None, 0.8], ids=["linear", "saturating"])
+@pytest.mark.slow
 def test_one_prism_is_two_cubes_side_by_side(turn, saturation):
     """A 2 x 1 x 1 mm prism of 6 x 3 x 3 cells (one body: its own Toeplitz table) against
     two 1 mm cubes of 3 x 3 x 3 cells (two bodies: pair-by-pair cross blocks), the second
@@ -133,6 +137,7 @@ def test_one_prism_is_two_cubes_side_by_side(turn, saturation):
     np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
 
 
+@pytest.mark.slow
 def test_two_far_spheres_magnetise_one_another_as_two_dipoles():
     """Two unequal spheres (radii 1 and 0.75 mm, mu_r 2 and 3, the second saturating far
     above its field: a mixed linear / saturating system of unequal cells), centres 4 mm
@@ -160,6 +165,7 @@ def test_two_far_spheres_magnetise_one_another_as_two_dipoles():
         assert abs(rise / want - 1) < 1e-2, (rises, expected)
 
 
+@pytest.mark.slow
 def test_derivatives_of_a_saturating_body_through_its_solve():
     """jax.jacfwd of a saturated sphere's own field at a point with respect to the dipole's
     position and to J_s (the implicit derivatives of the nonlinear solve), against central

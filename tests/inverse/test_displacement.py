@@ -36,6 +36,7 @@ def solved():
     return truth, wide, inversion
 
 
+@pytest.mark.slow
 def test_noise_free_readings_give_the_displacement_to_1um(solved):
     truth, _, inversion = solved
     assert inversion.displacement.shape == (3, 125, 3)
@@ -44,6 +45,7 @@ def test_noise_free_readings_give_the_displacement_to_1um(solved):
     assert error.max() < 1e-6
 
 
+@pytest.mark.slow  # the solved fixture compiles the example's readings and their inversion
 def test_noisy_readings_report_their_error(solved):
     truth, _, inversion = solved
     error = np.asarray(inversion.displacement[1] - truth)
@@ -55,6 +57,7 @@ def test_noisy_readings_report_their_error(solved):
     assert np.all(np.asarray(inversion.chi2[1]) < 25.0)
 
 
+@pytest.mark.slow  # the solved fixture, as above (the gmr_inductor study inverts in the fast tier)
 def test_readings_out_of_range_are_flagged_never_wrong(solved):
     _, wide, inversion = solved
     status = np.asarray(inversion.status._value[2])

@@ -157,6 +157,7 @@ def _axisymmetric_fns(base="bonded", mesh=DEFAULT_MESH):
     return jax.jit(c), jax.jit(jax.grad(c, argnums=(0, 1, 2, 3, 4)))
 
 
+@pytest.mark.slow
 def test_axisymmetric_dome_hall_dome_meets_the_published_compliance():
     compliance, _ = _axisymmetric_fns()
     c = float(compliance(*DOME_HALL, 5.0))
@@ -164,12 +165,14 @@ def test_axisymmetric_dome_hall_dome_meets_the_published_compliance():
     assert c * 5.0 * 1e3 == pytest.approx(1.70, abs=0.02)  # the model class's 1.70 mm
 
 
+@pytest.mark.slow
 def test_axisymmetric_default_mesh_within_half_a_percent_of_a_refined_mesh():
     coarse = float(_axisymmetric_fns()[0](*DOME_HALL, 5.0))
     fine = float(_axisymmetric_fns(mesh=(4, 32))[0](*DOME_HALL, 5.0))
     assert coarse == pytest.approx(fine, rel=0.005)
 
 
+@pytest.mark.slow
 def test_axisymmetric_sliding_base_is_softer():
     bonded = float(_axisymmetric_fns()[0](*DOME_HALL, 5.0))
     sliding = float(_axisymmetric_fns(base="sliding")[0](*DOME_HALL, 5.0))
@@ -185,6 +188,7 @@ def _central_difference(fn, args, i, relative_step=1e-5):
     return (float(fn(*hi)) - float(fn(*lo))) / (2 * h)
 
 
+@pytest.mark.slow
 def test_axisymmetric_gradients_equal_central_differences():
     compliance, grad = _axisymmetric_fns()
     args = (*DOME_HALL, 5.0)
@@ -193,21 +197,31 @@ def test_axisymmetric_gradients_equal_central_differences():
         assert float(g) == pytest.approx(_central_difference(compliance, args, i), rel=1e-5)
 
 
+@functools.cache
+def _compliance_derivatives():
+    """(first, second): jitted forward-mode Jacobian and forward-over-forward Hessian of the
+    resin dome's compliance in (outer radius, thickness, held force), compiled once for the
+    tests of the radius and the held force below."""
+
+    def c(radius, thickness, force):
+        return dome_compliance(outer_radius=radius, thickness=thickness, material=RESIN, max_force=force)
+
+    argnums = (0, 1, 2)
+    return jax.jit(jax.jacfwd(c, argnums)), jax.jit(jax.jacfwd(jax.jacfwd(c, argnums), argnums))
+
+
 @pytest.mark.slow
 def test_axisymmetric_second_derivatives_equal_differences_of_the_first():
     # forward over forward, as the design solver's Hessians take it: the implicit JVP
     # differentiated once more, in the thickness and the radius (mixed: a sweep over the
-    # radius differentiates the design in both)
-    def c(radius, thickness):
-        return dome_compliance(outer_radius=radius, thickness=thickness, material=RESIN, max_force=5.0)
-
-    args = (8e-3, 2e-3)
-    first = jax.jit(jax.jacfwd(c, argnums=(0, 1)))
-    second = np.array(jax.jit(jax.jacfwd(jax.jacfwd(c, argnums=(0, 1)), argnums=(0, 1)))(*args))
+    # radius differentiates the design in both), at a held force of 5 N
+    jacobian, hessian = _compliance_derivatives()
+    args = (8e-3, 2e-3, 5.0)
+    second = np.array(hessian(*args))
     assert np.all(np.isfinite(second))
     for j in range(2):
         for i in range(2):
-            difference = _central_difference(lambda *a: first(*a)[j], args, i, 1e-4)
+            difference = _central_difference(lambda *a: jacobian(*a)[j], args, i, 1e-4)
             assert second[j, i] == pytest.approx(difference, rel=1e-5)
 
 
@@ -217,17 +231,22 @@ def test_axisymmetric_second_derivatives_in_the_held_value_equal_differences_of_
     # the held force (dome_compliance) or travel (dome_curve) and the thickness, mixed:
     # the second-order rule's rows of the held travel (the held value's own second
     # tangent is zero here; test_dome_tangent.py checks that term)
-    def output(thickness, value):
-        if control == "force":
-            return dome_compliance(outer_radius=8e-3, thickness=thickness, material=RESIN, max_force=value)
-        curve = dome_curve(
-            outer_radius=8e-3, thickness=thickness, material=RESIN, travels=jnp.stack([value]), estimate=False
-        )
-        return curve.force[0]
-
     args = (2e-3, 3.0 if control == "force" else 1.2e-3)
-    first = jax.jit(jax.jacfwd(output, argnums=(0, 1)))
-    second = np.array(jax.jit(jax.jacfwd(jax.jacfwd(output, argnums=(0, 1)), argnums=(0, 1)))(*args))
+    if control == "force":
+        # the compliance's derivatives in (thickness, force) at the radius 8 mm
+        jacobian, hessian = _compliance_derivatives()
+        first = lambda *a: jacobian(8e-3, *a)[1:]  # noqa: E731
+        second = np.array(hessian(8e-3, *args))[1:, 1:]
+    else:
+
+        def output(thickness, value):
+            curve = dome_curve(
+                outer_radius=8e-3, thickness=thickness, material=RESIN, travels=jnp.stack([value]), estimate=False
+            )
+            return curve.force[0]
+
+        first = jax.jit(jax.jacfwd(output, argnums=(0, 1)))
+        second = np.array(jax.jit(jax.jacfwd(jax.jacfwd(output, argnums=(0, 1)), argnums=(0, 1)))(*args))
     assert np.all(np.isfinite(second))
     for j in range(2):
         for i in range(2):
@@ -278,6 +297,7 @@ def _light_load_ratios():
 
 
 @pytest.mark.parametrize("ratio", RATIOS)
+@pytest.mark.slow
 def test_light_loads_match_the_independent_linear_reference(ratio):
     model, reference = _light_load_ratios()[ratio]
     assert model == pytest.approx(reference, rel=0.015)
@@ -300,6 +320,7 @@ def test_thin_walls_tend_to_reissners_thin_shell_limit():
     assert excess[-1] < 0.1
 
 
+@pytest.mark.slow
 def test_the_thick_dome_is_softer_than_reissner_at_light_loads_and_stiffer_at_large_travel():
     """The 8 mm / 2 mm resin dome of the dome-Hall sensor. At a travel of 0.2 mm (t / 10) the
     thick wall's shear and compression under the plate make it softer than Reissner's
@@ -320,6 +341,7 @@ def test_the_thick_dome_is_softer_than_reissner_at_light_loads_and_stiffer_at_la
 
 
 @pytest.mark.parametrize("travel_fraction", [0.002, 0.05])
+@pytest.mark.slow
 def test_a_very_thin_wall_at_a_very_light_load_converges_near_reissner(travel_fraction):
     """t / R = 0.005, a force whose Reissner travel is 0.002 t (a path step shorter than the
     snap threshold; the potential's decrease below its rounding) or 0.05 t: converged, and
@@ -332,6 +354,7 @@ def test_a_very_thin_wall_at_a_very_light_load_converges_near_reissner(travel_fr
     assert 1.0 < float(value) / reissner < 1.06
 
 
+@pytest.mark.slow
 def test_a_light_level_beside_a_heavy_one_is_solved_as_alone():
     """A zero force (evaluated at the floor) in the same array as a force 400 times larger,
     whose path passes a snap of the 0.2 mm wall."""
@@ -342,6 +365,7 @@ def test_a_light_level_beside_a_heavy_one_is_solved_as_alone():
     assert float(both[1]) == pytest.approx(float(alone), rel=1e-6)
 
 
+@pytest.mark.slow
 def test_increasing_levels_crossed_in_one_step_are_solved_as_alone():
     """The dome-Hall paper's dome under the default design's 11 load levels and a repeated one: the
     first path step carries the five lightest, each of which starts the next one's guess
@@ -353,6 +377,7 @@ def test_increasing_levels_crossed_in_one_step_are_solved_as_alone():
         assert float(value) == pytest.approx(float(dome_compliance(max_force=force, **args)), rel=1e-6)
 
 
+@pytest.mark.slow
 def test_penalty_contact_leaves_a_negligible_penetration():
     mesh = _axisymmetric.Mesh(*DEFAULT_MESH, "bonded")
 
@@ -369,6 +394,7 @@ def test_penalty_contact_leaves_a_negligible_penetration():
         assert abs(float(y[-1] - outer_apex)) < 1e-3 * float(y[-1])
 
 
+@pytest.mark.slow
 def test_curve_ends_at_the_compliance_travel_and_stiffens_with_contact():
     curve = dome_curve(outer_radius=DOME_HALL[0], thickness=DOME_HALL[1], material=RESIN, max_force=5.0, n_points=5)
     assert bool(jnp.all(curve.result == DomeResult.successful))
@@ -382,6 +408,7 @@ def test_curve_ends_at_the_compliance_travel_and_stiffens_with_contact():
     assert 0 < float(curve.contact_radius[-1]) < DOME_HALL[0]
 
 
+@pytest.mark.slow
 def test_curve_derivatives_equal_central_differences_along_the_whole_path():
     travels = jnp.array([0.3e-3, 0.9e-3, 1.7e-3])
 
@@ -397,6 +424,7 @@ def test_curve_derivatives_equal_central_differences_along_the_whole_path():
     np.testing.assert_allclose(jnp.diag(d_travel), fd_travel, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_thin_dome_is_followed_through_its_snap():
     """8 mm / 1 mm: near 2.4 N, 3 mm of travel, the apex inverts and the force stalls while
     the travel grows (with the force held it would snap through; the force dips again near
@@ -425,6 +453,7 @@ def test_a_force_the_dome_cannot_carry_is_reported_never_a_plain_number():
         dome_compliance(**args)
 
 
+@pytest.mark.slow
 def test_design_on_a_dome_that_did_not_converge_is_never_successful():
     def model(values):
         _, result = dome_compliance(outer_radius=8e-3, thickness=0.4e-3, material=RESIN, max_force=5.0, throw=False)
@@ -444,6 +473,7 @@ def test_a_second_plain_call_reuses_the_compiled_program(caplog):
     assert not [r for r in caplog.records if "Compiling" in r.getMessage() and "axisymmetric" in r.getMessage()]
 
 
+@pytest.mark.slow
 def test_the_tangent_is_traced_once_for_a_compliance_and_its_second_derivatives(monkeypatch):
     """The path's Newton steps, its tangents and the implicit derivatives (to second
     order, as a design's search takes them) all use the dome's tangent: JAX transforms one

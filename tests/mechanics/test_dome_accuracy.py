@@ -44,6 +44,7 @@ def reference():
 
 @pytest.mark.parametrize("name", list(DOMES))
 @pytest.mark.parametrize("mesh", LADDER[:2])
+@pytest.mark.slow
 def test_estimate_bounds_the_error_against_a_much_finer_mesh(name, mesh, reference):
     estimate = _compliance(name, mesh=mesh, estimate=True)
     assert isinstance(estimate, ComplianceEstimate) and estimate.mesh == mesh
@@ -59,6 +60,7 @@ def test_buckled_dome_default_mesh_carries_its_several_percent():
     assert float(estimate.error) > 0.03 * float(estimate.value)
 
 
+@pytest.mark.slow  # the reference fixture compiles the two reference meshes: a minute
 def test_rtol_picks_a_level_that_meets_it_against_the_fine_mesh(reference):
     rtol = 1e-2
     estimate = _compliance("dome-Hall", rtol=rtol, estimate=True)
@@ -70,6 +72,7 @@ def test_rtol_picks_a_level_that_meets_it_against_the_fine_mesh(reference):
     assert float(plain) == float(estimate.value)
 
 
+@pytest.mark.slow
 def test_unreachable_rtol_is_a_status_never_a_silent_number():
     # below the estimate's floor: no level can meet it
     value, result = _compliance("dome-Hall", rtol=1e-5, throw=False)
@@ -80,6 +83,7 @@ def test_unreachable_rtol_is_a_status_never_a_silent_number():
         _compliance("dome-Hall", rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_curve_error_bounds_the_force_error_at_each_travel():
     Ro, t, _, reference_mesh = DOMES["dome-Hall"]
     travels = np.array([0.2, 0.8, 1.6]) * 1e-3
@@ -114,6 +118,7 @@ def test_bad_rtol_raises(kwargs, match):
         dome_curve(outer_radius=Ro, thickness=t, material=RESIN, max_force=force, **kwargs)
 
 
+@pytest.mark.slow
 def test_rtol_under_jit_raises_and_the_estimate_value_differentiates():
     Ro, _, force, _ = DOMES["dome-Hall"]
 

@@ -63,6 +63,7 @@ def test_axisymmetric_invariants_equal_the_general_ones(scale):
 
 
 @pytest.mark.parametrize("shape", [(1, 4), (2, 6)])
+@pytest.mark.slow
 def test_assembled_hessian_equals_jax_hessian_of_the_potential(shape):
     mesh = _axisymmetric.Mesh(*shape, "bonded")
     y = pressed_state(mesh, amplitude=1e-5)
@@ -89,6 +90,7 @@ def test_assembled_hessian_equals_jax_hessian_of_the_potential(shape):
 
 @pytest.mark.parametrize("shape", [(1, 12), (2, 16), (3, 5)])
 @pytest.mark.parametrize("force_control", [False, True])
+@pytest.mark.slow
 def test_block_factor_solves_as_numpy_does(shape, force_control):
     mesh = _axisymmetric.Mesh(*shape, "bonded")
     _, H = derivatives(mesh, pressed_state(mesh), PARAMS)
@@ -117,6 +119,7 @@ def test_block_factor_flags_matrices_that_are_not_positive_definite():
 
 
 @pytest.mark.parametrize("resume", [1, 3, 11])
+@pytest.mark.slow
 def test_levenberg_shift_is_the_smallest_tried_that_makes_the_tangent_definite(resume):
     """Tried: no shift, then the shifts from index ``resume`` on (Newton resumes where its
     last shifted factor needed one); the chosen shift and its index against numpy's
@@ -150,6 +153,7 @@ def test_levenberg_shift_is_the_smallest_tried_that_makes_the_tangent_definite(r
 
 
 @pytest.mark.parametrize("force_control", [False, True])
+@pytest.mark.slow
 def test_second_order_rule_equals_jax_differentiating_the_first_order_formula(force_control):
     # state_tangent's own JVP rule against JAX's plain forward mode through the
     # first-order formula (its solve differentiated through the matvec), with every

@@ -82,6 +82,7 @@ def test_small_strain_moduli():
     assert pdms.shear_modulus == pytest.approx(750e3 / 2.98, rel=1e-13)
 
 
+@pytest.mark.slow
 def test_hyperelastic_small_strain_limit_matches_bulk_and_shear():
     # the tangent of the energy at F = I gives back the stated small-strain moduli
     for material in (MooneyRivlin(c10=C10, c01=C01, bulk=3e6), NeoHookean(mu=4e5, bulk=2e7)):

@@ -60,6 +60,7 @@ def test_bessel_functions_match_scipy():
 
 
 @pytest.mark.parametrize("nu", [0.3, 0.49])
+@pytest.mark.slow
 def test_thick_layer_is_boussinesq_half_space(nu):
     """Johnson (1985) eqs. 3.41-3.42 and 3.44: surface displacements of a half-space under a
     uniform pressure p and Hertz's pressure p0 sqrt(1 - r^2/a^2) on a circle."""
@@ -239,6 +240,7 @@ def _fe_mesh(a, h):
     ("a_over_h", "profile", "nu"),
     [(0.5, "hertz", 0.3), (2.0, "hertz", 0.3), (2.0, "uniform", 0.3), (1.0, "hertz", 0.45)],
 )
+@pytest.mark.slow
 def test_pressure_matches_axisymmetric_fe(a_over_h, profile, nu):
     """Normal load on layers of a / h = 0.5, 1 and 2 against the harmonic-0 finite elements.
 
@@ -351,6 +353,7 @@ def test_shapes_jit_vmap():
     np.testing.assert_allclose(base, 0.0, atol=1e-12 * np.max(np.abs(u)))
 
 
+@pytest.mark.slow
 def test_derivatives_match_finite_differences():
     """Differentiable in h, mu, nu, a, the forces and the load centre: jax.grad against
     central differences (relative step 1e-6; the quadrature nodes move with a, so the
@@ -396,6 +399,7 @@ def test_hertz_contact_fits_the_sphere_on_a_thick_layer():
     np.testing.assert_allclose(-u[0, 2], contact.depth, rtol=2e-2)
 
 
+@pytest.mark.slow
 def test_far_points_and_quadrature_convergence():
     """Beyond a few thicknesses the bonded layer hardly moves; the default nodes agree with
     four times as many (a window twice as wide, panels half as wide) up to r / a = 39, to 1e-5
@@ -471,6 +475,7 @@ def _curl_by_differences(points, layer, load, step=1e-6):
     ("radius", "nu", "profile"),
     [(1.7e-3, 0.49, "hertz"), (0.5e-3, 0.49, "hertz"), (1.0e-3, 0.3, "uniform")],
 )
+@pytest.mark.slow
 def test_grid_evaluation_matches_the_hankel_quadrature(radius, nu, profile):
     """The cells' Fourier sums (layer_displacement_grid) against the Hankel quadrature
     (layer_displacement, itself checked above against half-space and finite-element
@@ -496,6 +501,7 @@ def test_grid_evaluation_matches_the_hankel_quadrature(radius, nu, profile):
     np.testing.assert_allclose(got_rotation, turned, atol=1e-3 * np.max(np.abs(turned)))
 
 
+@pytest.mark.slow
 def test_grid_evaluation_differentiates():
     """jax's derivatives of the grid's displacement and rotation along the load's position,
     forces and radius and the layer's thickness, modulus and Poisson ratio, against central

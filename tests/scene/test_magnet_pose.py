@@ -75,6 +75,7 @@ def _hand_built_magnets(displacement):
     return magpy.Collection(main, carried, fixed)
 
 
+@pytest.mark.slow
 def test_posed_magnets_sum_as_magpylibs_collection():
     scene = scene_from_spec(_posed_spec())
     rng = np.random.default_rng(4)
@@ -87,6 +88,7 @@ def test_posed_magnets_sum_as_magpylibs_collection():
         assert np.max(error) < 1e-10
 
 
+@pytest.mark.slow
 def test_outputs_follow_the_posed_magnets():
     """field_rest is Bz at the sensor (the origin) from all three magnets."""
     out = jax.jit(outputs)(scene_from_spec(_posed_spec()), Loads(np.array([0.0, 1.0])))

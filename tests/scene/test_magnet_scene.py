@@ -12,6 +12,7 @@ from magdesign.scene import Loads, loads_from_spec, outputs, scene_from_spec, si
 from magdesign.transducers import count_events
 
 
+@pytest.mark.slow
 def test_inductors_flag_each_slip():
     # three stick-slip cycles at 1 kHz: the shear force ramps up for 0.2 s, then
     # snaps back within one sample; a constant 5 N presses throughout
@@ -28,6 +29,7 @@ def test_inductors_flag_each_slip():
 
 
 @pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.slow
 def test_stick_phases_after_a_pause_are_not_slips(seed):
     """Four slips, each stick phase starting after a pause: with the inductors' own noise
     (the spec's 1.4 mV) the 3-sigma band has a width, so only the four snaps are flagged.

@@ -44,6 +44,7 @@ def test_dome_picture_shows_the_magnets_field_at_rest_and_pressed(tmp_path):
 
 
 @pytest.mark.parametrize("name", ["film_hall", "pole_plate", "spin_valve_matrix"])
+@pytest.mark.slow
 def test_every_kind_of_scene_draws(name, tmp_path):
     spec = example(name)
     figure = plot_scene(scene_from_spec(spec), loads_from_spec(spec), tmp_path / "scene.png")
@@ -53,6 +54,7 @@ def test_every_kind_of_scene_draws(name, tmp_path):
         assert np.isfinite(magnitude).mean() > 0.2 and np.nanmin(magnitude) > 0  # the film: no field drawn above it
 
 
+@pytest.mark.slow
 def test_further_magnets_are_in_the_picture(tmp_path):
     spec = example("dome_hall")
     spec["magnet"]["fidelity"] = "exact"

@@ -24,6 +24,7 @@ def reduced_spec():
 
 
 @pytest.mark.parametrize("half", [False, True])
+@pytest.mark.slow
 def test_tangential_force_against_magpylib_and_hand_derived_lever(half):
     """-F_t(theta) against the same charge model evaluated with magpylib's plate field and
     the ends' velocities written by hand: tip = c + r_b out, out = (sin, 0, -cos), top =
@@ -98,6 +99,7 @@ def _rod_in_magpylib(scene, theta):
     return magpy.Collection(*cells), centre, turn, np.asarray(rod.centres), magnetization
 
 
+@pytest.mark.slow
 def test_moments_field_against_magpylib_cuboids():
     """The scene's field (plate + the rod's cells, at tilt 10 deg) against magpylib's
     cylinder and cuboids placed at the same poses with the same magnetisation: checks the
@@ -113,6 +115,7 @@ def test_moments_field_against_magpylib_cuboids():
     np.testing.assert_allclose(value, expected, rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_moments_coenergy_gradient_is_the_kelvin_force_and_torque():
     """dW'/dtheta (the scene's tangential force times r_b) against the torque about the
     ball's centre of the plate's forces (m . grad) B and torques m x B on the solved cells,
@@ -179,6 +182,7 @@ def test_moments_spec_errors_name_the_key():
         scene_from_spec(spec)
 
 
+@pytest.mark.slow
 def test_a_saturating_rod():
     """[pole] saturation: the rod's cells stay below J_s where the linear solve passes it,
     the key is a design parameter, and bad values name the key."""

@@ -36,6 +36,7 @@ def spec_with(*parts):
     return spec
 
 
+@pytest.mark.slow
 def test_the_field_of_a_turned_soft_rod_against_magpylib():
     """A Ni-Fe rod turned by three angles beside the magnet: the scene's field (magnet +
     rod) against magpylib's cylinder plus cuboids at the rod's cells, magnetised as the
@@ -77,6 +78,7 @@ def test_the_field_of_a_turned_soft_rod_against_magpylib():
     assert np.linalg.norm(cuboids.getB(points[1])) > 1e-3 * np.linalg.norm(magnet.getB(points[1]))  # the rod matters
 
 
+@pytest.mark.slow
 def test_a_soft_back_plate_draws_the_flux_and_a_far_part_does_nothing():
     """A high-permeability plate just below the sensor raises the magnet's B_z there (the
     magnet's image), by less than the factor 2 of an infinite plate; a part a metre away
@@ -89,6 +91,7 @@ def test_a_soft_back_plate_draws_the_flux_and_a_far_part_does_nothing():
     assert abs(float(field(scene_from_spec(spec_with(far)), points, rest)[0, 2]) / bare - 1) < 1e-9
 
 
+@pytest.mark.slow
 def test_a_part_carried_by_the_load_moves_with_the_magnet():
     """A soft disc on the magnet (moves = true): at a displacement the field equals the
     rest field seen from the displaced point."""
@@ -140,6 +143,7 @@ def test_soft_parts_need_the_exact_field_and_a_cylinder_magnet():
         scene_from_spec(film)
 
 
+@pytest.mark.slow
 def test_parts_magnetise_one_another():
     """A second plate near the first changes the field by more than its own field alone
     does (the two magnetise one another); a second plate a metre away changes nothing."""
@@ -156,6 +160,7 @@ def test_parts_magnetise_one_another():
     assert abs(with_far / alone[0] - 1) < 1e-9
 
 
+@pytest.mark.slow
 def test_a_saturating_part_gives_less_than_the_linear_one():
     """A plate whose J_s is below what the magnet would drive it to: the gain over the bare
     magnet shrinks; a J_s far above changes nothing."""

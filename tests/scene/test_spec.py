@@ -111,6 +111,7 @@ def test_a_magnet_that_misses_its_layer_or_dome_is_refused(name, edit, fragment)
         ("dome_hall", "5 mm", 8e-3 - 5e-3),  # hanging under the inner apex (8 - 2 mm): its top face at 6 mm
     ],
 )
+@pytest.mark.slow
 def test_embed_is_the_depth_of_the_magnet_below_the_top_of_its_part(name, gap, embed):
     spec = example(name)
     spec["geometry"]["gap"] = gap
