@@ -8,15 +8,20 @@ import sys
 STUDIES = pathlib.Path(__file__).resolve().parents[2] / "studies"
 
 
-def run_quick(name: str, out: pathlib.Path) -> dict:
-    """``python studies/<name>.py --quick --out <out>``, in this process; returns its
-    results.json after checking that report.md opens with the published comparison."""
+def load_study(name: str):
+    """The module of ``studies/<name>.py``, imported without running it."""
     if str(STUDIES) not in sys.path:
         sys.path.insert(0, str(STUDIES))
     spec = importlib.util.spec_from_file_location(f"study_{name}", STUDIES / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    module.main(["--quick", "--out", str(out)])
+    return module
+
+
+def run_quick(name: str, out: pathlib.Path) -> dict:
+    """``python studies/<name>.py --quick --out <out>``, in this process; returns its
+    results.json after checking that report.md opens with the published comparison."""
+    load_study(name).main(["--quick", "--out", str(out)])
     report = (out / "report.md").read_text()
     assert "| quantity | published | source | magdesign | difference | why |" in report
     for figure in json.loads((out / "results.json").read_text()).get("figures", []):

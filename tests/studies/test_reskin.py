@@ -1,12 +1,14 @@
 """studies/reskin.py in quick mode: the board's chips, the model's bounds beside ReSkin's
 figures (Bhirangi, Hellebrekers, Majidi and Gupta 2021), the sweep's units, the tolerances'
-first-order spreads and the design, against references computed here by hand."""
+first-order spreads and the design, against references computed here by hand. The quick run
+compiles the skin's bounds for several structures (minutes on two cores): its tests are slow,
+the board's chips are checked in the fast tier without it."""
 
 import re
 
 import numpy as np
 import pytest
-from study_runner import assert_opens_with
+from study_runner import assert_opens_with, load_study
 
 NAME = "reskin"
 MIL = 0.0254e-3  # m per mil (1/1000 inch, exactly 25.4 um)
@@ -27,20 +29,32 @@ SHEAR_MODULUS, POISSON, SPHERE, FORCE = 100e3, 0.49, 2e-3, 0.1
 POLARIZATION, POLARIZATION_TOLERANCE = 0.02, 0.10
 
 
+def board_offsets():
+    """The pick-and-place centres (5, 2) (m) relative to U1, in the study's chip order."""
+    middle = np.array(PICK_PLACE["U1"])
+    return np.array([np.subtract(PICK_PLACE[name], middle) * MIL for name in ("U1", "U3", "U5", "U2", "U4")])
+
+
+def test_the_studys_board_chips_are_the_pick_and_place_files():
+    np.testing.assert_allclose(load_study(NAME).board_chips(), board_offsets(), atol=1e-9)
+
+
+@pytest.mark.slow
 def test_report_opens_with_the_papers_figures(results, out):
     assert_opens_with(out, PUBLISHED)
 
 
+@pytest.mark.slow
 def test_the_chips_are_the_boards(results):
     chips = np.array(results["chips"])
-    middle = np.array(PICK_PLACE["U1"])
-    expected = np.array([np.subtract(PICK_PLACE[name], middle) * MIL for name in ("U1", "U3", "U5", "U2", "U4")])
+    expected = board_offsets()
     assert chips.shape == (5, 2)
     np.testing.assert_allclose(chips, expected, atol=1e-9)
     # 275.59 mil apart: a cross at 7.000 mm (the example spec's 10 mm is not the board's)
     assert results["pitch"] == pytest.approx(7.0e-3, abs=1e-5)
 
 
+@pytest.mark.slow
 def test_contact_radius_is_hertzs(results):
     young = 2 * SHEAR_MODULUS * (1 + POISSON)
     reduced = young / (1 - POISSON**2)
@@ -49,6 +63,7 @@ def test_contact_radius_is_hertzs(results):
     assert radius == pytest.approx(0.7259e-3, rel=1e-3)  # by hand: (3 * 0.1 * 2e-3 / (4 * 392.16e3)) ** (1/3)
 
 
+@pytest.mark.slow
 def test_the_bounds_lie_below_the_papers_learned_figures(results):
     """The report's verdict at quick mode's coarse cells and corner map (a regression of the
     pipeline, not of ReSkin: full mode's finer cells and map give larger worst-case bounds):
@@ -61,6 +76,7 @@ def test_the_bounds_lie_below_the_papers_learned_figures(results):
     assert results["units"]["localisation_worst"] == "m"
 
 
+@pytest.mark.slow
 def test_the_sweep_table_prints_its_units(results, out):
     """Each row of the report's sweep table shows the SI results in its headers' units (mm, mN, um)."""
     lines = (out / "report.md").read_text().splitlines()
@@ -78,6 +94,7 @@ def test_the_sweep_table_prints_its_units(results, out):
         assert value == pytest.approx(row["localisation_worst"] * 1e6, rel=5e-3)
 
 
+@pytest.mark.slow
 def test_the_sweeps_board_pitch_agrees_with_the_board(results):
     """The sweep's ideal cross at 7 mm and 2 mm (the chips moved in one compiled scene) against
     the board's own chips (U5 sits 2 mil off the axis) built from the spec: the same skin to a
@@ -87,6 +104,7 @@ def test_the_sweeps_board_pitch_agrees_with_the_board(results):
         assert row[name] == pytest.approx(results["outputs"][name], rel=0.05), name
 
 
+@pytest.mark.slow
 def test_the_tolerance_of_j0_spreads_the_bounds_by_its_own_share(results):
     """The readings are linear in J0, so a bound c / J0 spreads by the relative tolerance of
     J0 to first order: 10 % of the bound (the study's forward difference over 0.1 % of J0
@@ -102,6 +120,7 @@ def test_the_tolerance_of_j0_spreads_the_bounds_by_its_own_share(results):
         assert part == pytest.approx(POLARIZATION_TOLERANCE * row["force_resolution_normal"], rel=2e-3)
 
 
+@pytest.mark.slow
 def test_the_design_halves_the_bound_at_twice_j0(results):
     design = results["design"]
     assert design["status"] == "successful"
