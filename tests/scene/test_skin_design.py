@@ -32,6 +32,7 @@ def block_field(chips, depth=1e-3):
     return block.getB(points).reshape(-1, 3) + np.array([0.0, 0.0, 50e-6])
 
 
+@pytest.mark.slow
 def test_each_listed_chip_is_a_parameter_and_a_design_moves_it():
     scene = scene_from_spec(example("skin"))
     names = [f"sensor.chips[{i}][{k}]" for i in range(5) for k in range(2)]
