@@ -70,6 +70,48 @@ def compiler_options():
     return known
 
 
+# The library's own caches of programs (the design solver's), emptied with JAX's caches by
+# free_programs_near_mapping_limit: each is the clear function of one.
+_PROGRAM_CACHES = []
+
+
+def program_cache(cache):
+    """``cache`` (a dict, or a function cached by ``functools``) registered as a cache of
+    compiled or jitted programs, which :func:`free_programs_near_mapping_limit` empties
+    with JAX's caches; returned, so that it may decorate the function."""
+    _PROGRAM_CACHES.append(getattr(cache, "cache_clear", None) or cache.clear)
+    return cache
+
+
+def mapped_regions():
+    """(regions, limit): how many memory mappings this process holds and the most that
+    Linux allows one process (vm.max_map_count); None where /proc cannot tell."""
+    try:
+        with open("/proc/sys/vm/max_map_count") as limit, open("/proc/self/maps", "rb") as maps:
+            return maps.read().count(b"\n"), int(limit.read())
+    except (OSError, ValueError):
+        return None
+
+
+def free_programs_near_mapping_limit() -> bool:
+    """Empty JAX's caches and the library's caches of programs (:func:`program_cache`) when
+    this process holds more than half the memory mappings that Linux allows it; whether it
+    did. Called before a new program is compiled. XLA:CPU's fusion emitters (jaxlib 0.12's
+    only code generator) load each kernel as an object of its own, about three mappings
+    apiece, and a design solve's program holds about 1,300: a few dozen kept programs pass
+    Linux's default limit (65,530), where the next one fails to load ("Failed to
+    materialize symbols"). Emptying the library's caches with JAX's makes every later
+    program compile through a call of this function. Reading the count takes milliseconds
+    (a compile takes seconds); where /proc cannot tell (not Linux), nothing is done."""
+    regions = mapped_regions()
+    if regions is None or regions[0] <= regions[1] // 2:
+        return False
+    for clear in _PROGRAM_CACHES:
+        clear()
+    jax.clear_caches()
+    return True
+
+
 @contextlib.contextmanager
 def gc_paused():
     """Python's cyclic garbage collector off for the block, then as it was. Tracing a

@@ -5,6 +5,7 @@ import jax
 import pytest
 
 from magdesign._cache import use_compilation_cache
+from magdesign._tracing import free_programs_near_mapping_limit
 
 # One persistent compilation cache for the tests, in the repository's .pytest_cache (never
 # the user's): the xdist workers, each module after clear_caches below and the commands the
@@ -23,27 +24,14 @@ def _drop_compiled_programs_after_each_module():
     jax.clear_caches()
 
 
-def mapped_regions():
-    """(regions, limit): how many memory mappings this process holds and the most that
-    Linux allows one process (vm.max_map_count); None where /proc cannot tell."""
-    try:
-        with open("/proc/sys/vm/max_map_count") as limit, open("/proc/self/maps", "rb") as maps:
-            return sum(1 for _ in maps), int(limit.read())
-    except (OSError, ValueError):
-        return None
-
-
 @pytest.fixture(autouse=True)
 def _drop_compiled_programs_before_the_mapping_limit():
-    """Free the compiled programs once they hold half the mappings a process may have.
-    XLA:CPU's fusion emitters (jaxlib 0.12's only code generator) load each kernel as an
-    object of its own, three mappings apiece: one design solve adds about 1,300, so a
-    module of 50 solves reaches Linux's default limit (65,530), where XLA's next program
-    fails to load ("Failed to materialize symbols")."""
+    """Free the compiled programs once they hold half the memory mappings a process may
+    have (magdesign._tracing.free_programs_near_mapping_limit), after each test: the
+    library checks before each design program it compiles, and a test module compiles
+    many other programs too (fields, scenes, domes)."""
     yield
-    regions = mapped_regions()
-    if regions is not None and regions[0] > regions[1] // 2:
-        jax.clear_caches()
+    free_programs_near_mapping_limit()
 
 
 # Modules that take minutes of one worker, run first: with `-n 2 --dist loadscope` (the

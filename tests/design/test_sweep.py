@@ -139,9 +139,12 @@ def test_list_of_points_and_small_chunks_agree_with_one_batch():
 @pytest.mark.slow
 def test_a_sweep_of_a_few_points_moves_its_bar_per_point_with_the_answers_of_one_batch(cheap_spec, monkeypatch):
     """15 points go in chunks of one (the bar moves 15 times, not once at the end), and each
-    point's answer is, bit for bit, the one it gets in a batch of 16 lanes (the same 15
-    points repeated 16 times go in chunks of 16 copies of one point; the sweep of 15 went in
-    one chunk of 16 before)."""
+    point's answer is the one it gets in a batch of 16 lanes (the same 15 points repeated
+    16 times go in chunks of 16 copies of one point; the sweep of 15 went in one chunk of 16
+    before): the same status and steps, and numbers within a few units in the last place.
+    The programs of 1 and of 16 lanes are compiled apart, and XLA:CPU may vectorise their
+    loops differently (where a multiply and an add fuse, the order of a sum), so that the
+    last bits may differ (up to 3 ulp with jaxlib 0.12's fusion emitters)."""
     moves = []
 
     class Bar:
@@ -164,13 +167,14 @@ def test_a_sweep_of_a_few_points_moves_its_bar_per_point_with_the_answers_of_one
     assert few.successful.all()
     np.testing.assert_array_equal(many.status[::16], few.status)
     np.testing.assert_array_equal(many.steps[::16], few.steps)
+    rtol = 16 * np.finfo(np.float64).eps
     for name in few.parameters:
-        np.testing.assert_array_equal(many.parameters[name][::16], few.parameters[name])
+        np.testing.assert_allclose(many.parameters[name][::16], few.parameters[name], rtol=rtol, atol=0)
     for name in few.outputs:
-        np.testing.assert_array_equal(many.outputs[name][::16], few.outputs[name])
+        np.testing.assert_allclose(many.outputs[name][::16], few.outputs[name], rtol=rtol, atol=0)
     for key, column in few.derivatives.items():
         for name in column:
-            np.testing.assert_array_equal(many.derivatives[key][name][::16], column[name])
+            np.testing.assert_allclose(many.derivatives[key][name][::16], column[name], rtol=rtol, atol=0)
 
 
 def cubic_problem():

@@ -16,7 +16,7 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec
 from tqdm import tqdm
 
 from magdesign._progress import stage
-from magdesign._tracing import errors_as_nan, gc_paused, has_loops
+from magdesign._tracing import errors_as_nan, free_programs_near_mapping_limit, gc_paused, has_loops, program_cache
 from magdesign.design._sqp.jet import _values
 from magdesign.design._sqp.program import _compiled, _host, _structure, _unpack
 from magdesign.design.problem import per_problem
@@ -200,7 +200,7 @@ def _in_chunks(key, arrays, y0, thetas, share, chunk, bar, batch_memory):
     return np.concatenate(packed)
 
 
-_PROGRAMS = {}  # (structure, chunk size, columns, devices) -> compiled batch program
+_PROGRAMS = program_cache({})  # (structure, chunk size, columns, devices) -> compiled batch program
 
 
 def _batch_program(key, arrays, size, n, p, sharding, batch_memory):
@@ -217,6 +217,7 @@ def _batch_program(key, arrays, size, n, p, sharding, batch_memory):
             )
             if len(_PROGRAMS) >= 64:
                 _PROGRAMS.clear()
+            free_programs_near_mapping_limit()
             shape = lambda columns: jax.ShapeDtypeStruct((size, columns), jnp.float64, sharding=sharding)  # noqa: E731
             with errors_as_nan(), gc_paused():
                 _PROGRAMS[entry] = _compiled(key, True).lower(arrays, shape(n), shape(p)).compile()

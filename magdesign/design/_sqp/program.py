@@ -12,7 +12,13 @@ import numpy as np
 from jaxtyping import Array
 
 from magdesign import _export
-from magdesign._tracing import compiler_options, errors_as_nan, gc_paused
+from magdesign._tracing import (
+    compiler_options,
+    errors_as_nan,
+    free_programs_near_mapping_limit,
+    gc_paused,
+    program_cache,
+)
 from magdesign.design._sqp.core import CoreSolution, _core
 from magdesign.design._sqp.jet import Settings, problem_arrays
 from magdesign.design._sqp.sqp import SQP
@@ -102,12 +108,16 @@ def _host(problem):
     )
 
 
+@program_cache
 @functools.lru_cache(maxsize=64)
 def _compiled(key, batched):
     """The jitted core of one structure of (problem, settings), ``key`` a pair of
     :func:`_split` keys: (arrays, y0, theta) -> packed solution, ``arrays`` the pair of
     their array leaves, vmapped over y0 and theta if ``batched``; kept exported on disk
-    where :mod:`magdesign._export` is on (``key`` is the structure it is kept by)."""
+    where :mod:`magdesign._export` is on (``key`` is the structure it is kept by). A new
+    entry is a program about to be compiled: first the compiled programs are freed if
+    they hold half the memory mappings the process may have."""
+    free_programs_near_mapping_limit()
 
     def run(arrays, y0, theta):
         problem, settings = (_joined(part_key, part) for part_key, part in zip(key, arrays))

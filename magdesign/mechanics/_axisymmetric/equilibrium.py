@@ -444,7 +444,11 @@ def _first_order(mesh, force_control, params, y, params_dot, value_dot):
         free_dot = lax.custom_linear_solve(matvec, b, lambda _, c: _blocks.solve(mesh.layout, F, c), symmetric=True)
         return free_dot + held_dot
 
-    _, g_dot = jax.jvp(lambda p: _gradient(mesh, y, p), (params,), (params_dot,))
+    # linearize, not jvp: reverse mode transposes this body (state_tangent's) equation by
+    # equation, and a jvp of the jitted gradient is one jitted call with the primal and the
+    # tangent among its results, which jax 0.12's transposition takes as linear whole (a
+    # product of two linear values: an error); linearize keeps the tangent's call apart
+    g_dot = jax.linearize(lambda p: _gradient(mesh, y, p), params)[1](params_dot)
     return solve(g_dot, value_dot), solve
 
 
