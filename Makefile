@@ -1,5 +1,7 @@
 # The two commands a newcomer needs: `make demo` and `make test`. Each builds .venv itself.
 VENV ?= .venv
+# the Python that builds .venv (3.11 or newer; 3.12 and later get JAX 0.12)
+PYTHON ?= python3
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
@@ -17,7 +19,7 @@ define install
 endef
 
 $(STAMP): pyproject.toml
-	test -x $(PY) || python3 -m venv $(VENV)
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@$(call install,-e '.[test]')
 	touch $(STAMP)
 
