@@ -338,11 +338,16 @@ def run_solve(args):
     return 0 if result.status == "successful" and reached else EXIT_NOT_SOLVED
 
 
+def _solving_at(levels: str) -> str:
+    """The progress line's stage: "solving at" the levels, or "solving" for a scene without any."""
+    return f"solving at {levels}" if levels else "solving"
+
+
 def _solve_at_levels(args, spec, problem, auto):
     """([(levels, problem, result)] of the solve at the spec's (or --fidelity's) levels and, with
     --fidelity auto, its confirmation at the exact levels; the confirmation's start or None)."""
     levels = _levels_at(spec, None if auto else args.fidelity)
-    stage(f"solving at {levels} ({FIRST_CALL})")
+    stage(f"{_solving_at(levels)} ({FIRST_CALL})")
     first = solve_problem(problem)
     answers = [(levels, problem, first)]
     exact = exact_levels(spec) if auto else None
@@ -552,7 +557,7 @@ def run_tolerance(args):
             tp, result.parameters, samples=args.samples, seed=args.seed, progress=False if args.quiet else None
         )
 
-    stage(f"solving at {levels} ({FIRST_CALL})")
+    stage(f"{_solving_at(levels)} ({FIRST_CALL})")
     nominal = solve_problem(tp.problem)
     runs = [("nominal", nominal, analyse(nominal, "nominal"))]
     if args.robust is not None:
