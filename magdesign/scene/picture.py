@@ -123,6 +123,22 @@ def _draw_bodies(axis, scene, displacement):
         axis.add_patch(
             Rectangle((-side / 2 * MM, 0.0), side * MM, h * MM, facecolor="none", edgecolor="k", label="skin")
         )
+        if scene.magnets is not None:
+            # the discrete magnets at rest, projected on y = 0: filled where the plane cuts them
+            centres, sizes = np.asarray(scene.magnets.centres), np.asarray(scene.magnets.sizes)
+            for index, (centre, size) in enumerate(zip(centres, sizes)):
+                cut = abs(centre[1]) <= size[1] / 2
+                axis.add_patch(
+                    Rectangle(
+                        ((centre[0] - size[0] / 2) * MM, (centre[2] - size[2] / 2) * MM),
+                        size[0] * MM,
+                        size[2] * MM,
+                        facecolor="0.85" if cut else "none",
+                        edgecolor="k",
+                        linestyle="-" if cut else ":",
+                        label="magnets (dotted: off the plane)" if index == 0 else None,
+                    )
+                )
         if u[2] > 0.0:
             radius = float(scene.sphere_radius)
             axis.add_patch(Circle((u[0] * MM, (h + radius) * MM), radius * MM, **OUTLINE, label="indenter"))
@@ -149,7 +165,8 @@ def _draw_bodies(axis, scene, displacement):
 
 
 def _plane_field(scene, displacement, x, z):
-    """|B| and (Bx, Bz) (T) on the (x, z) grid in y = 0; NaN above a film and inside a skin (no field model)."""
+    """|B| and (Bx, Bz) (T) on the (x, z) grid in y = 0; NaN above a film and inside a
+    magnetised skin (no field model there)."""
     xx, zz = np.meshgrid(x, z)
     points = jnp.asarray(np.stack([xx, 0 * xx, zz], axis=-1))
     field = np.asarray(
@@ -158,9 +175,10 @@ def _plane_field(scene, displacement, x, z):
     if isinstance(scene, FilmScene):
         below = zz < float(scene.layer.thickness + displacement[2])
         field = np.where(below[..., None], field, np.nan)
-    if isinstance(scene, SkinScene):
-        # inside the skin the moved rigid cells leave gaps and overlaps (a cell face lies in
-        # y = 0): their field there is not the continuum's, and is left out
+    if isinstance(scene, SkinScene) and scene.magnets is None:
+        # inside a magnetised skin the moved rigid cells leave gaps and overlaps (a cell face
+        # lies in y = 0): their field there is not the continuum's, and is left out; an
+        # unmagnetised layer's discrete magnets have their exact field everywhere
         inside = (zz >= 0.0) & (zz <= float(scene.thickness)) & (np.abs(xx) <= float(scene.size[0]) / 2)
         field = np.where(inside[..., None], np.nan, field)
     return np.linalg.norm(field, axis=-1), field[..., 0], field[..., 2]

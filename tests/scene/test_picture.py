@@ -72,3 +72,34 @@ def test_further_magnets_are_in_the_picture(tmp_path):
         (_, x_max), (z_min, _) = axis.get_xlim(), axis.get_ylim()
         assert x_max > 16 and z_min < -7  # mm: the fixed magnet's outline is inside
         assert len(axis.patches) >= 3  # the two magnets and the dome
+
+
+@pytest.mark.slow
+def test_an_eflesh_skins_magnets_and_their_field_are_drawn(tmp_path):
+    """The eFlesh-like example: its nine magnets are drawn (the three the plane y = 0 cuts
+    filled), and the field at rest, inside the unmagnetised layer too, is magpylib's nine
+    Cuboids'."""
+    spec = example("eflesh")
+    scene = scene_from_spec(spec)
+    figure = plot_scene(scene, loads_from_spec(spec), tmp_path / "eflesh.png")
+    axis = figure.axes[0]
+    magnets = [patch for patch in axis.patches if patch.get_linestyle() in ("-", ":") and patch.get_width() == 1.0]
+    assert len(magnets) == 9
+    assert sum(patch.get_facecolor()[3] > 0 for patch in magnets) == 3
+    x, z, magnitude = _drawn(axis)
+    xx, zz = np.meshgrid(x, z)
+    points = np.stack([xx, 0 * xx, zz], -1).reshape(-1, 3)
+    cuboids = magpy.Collection(
+        [
+            magpy.magnet.Cuboid(polarization=(0, 0, 1.3), dimension=(1e-3, 1e-3, 1e-3), position=(cx, cy, 3e-3))
+            for cx in (-10e-3, 0.0, 10e-3)
+            for cy in (-10e-3, 0.0, 10e-3)
+        ]
+    )
+    expected = np.linalg.norm(cuboids.getB(points), axis=-1).reshape(magnitude.shape)
+    inside_layer = (zz > 0) & (zz < 6e-3)
+    assert np.all(np.isfinite(magnitude[inside_layer]))
+    outside_magnets = np.ones_like(xx, dtype=bool)
+    for cx in (-10e-3, 0.0, 10e-3):
+        outside_magnets &= ~((np.abs(xx - cx) <= 0.6e-3) & (np.abs(zz - 3e-3) <= 0.6e-3))
+    np.testing.assert_allclose(magnitude[outside_magnets], expected[outside_magnets], rtol=1e-9)
