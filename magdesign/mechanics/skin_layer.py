@@ -69,6 +69,10 @@ Load profiles (total normal force Fn, tangential force Ft, radius a):
   and 7).
 - ``"thin"``: p = p0 (1 - r^2 / a^2)^2, p0 = 3 Fn / (pi a^2) (and q likewise): the contact
   pressure of a sphere on a thin incompressible bonded layer (:func:`thin_layer_contact`).
+- ``"flat"``: p = Fn / (2 pi a^2 sqrt(1 - r^2 / a^2)) (and q likewise): a rigid flat punch
+  of radius a on the half-space (Boussinesq's pressure, Johnson 1985, ch. 3), which presses
+  its face down uniformly by Fn (1 - nu) / (4 mu a). On a layer it holds while a / h is
+  small, as Hertz's does: the base stiffens the layer under a wide punch.
 
 Contact of a rigid sphere of radius R, two limits:
 
@@ -102,7 +106,7 @@ from jaxtyping import Array, ArrayLike, Float
 from magdesign._numerics import double_where
 from magdesign._validation import _concrete, check_positive
 
-PROFILES = ("uniform", "hertz", "thin")
+PROFILES = ("uniform", "hertz", "thin", "flat")
 
 # The cells' grid evaluation (module docstring): each period spans the layer and this many
 # thicknesses beyond it, and at a level d below the top the lattice reaches k d >= SPECTRAL_REACH.
@@ -258,7 +262,7 @@ class SurfaceLoad(eqx.Module):
         radius: a (m), > 0: the contact (patch) radius.
         normal_force: Fn (N), pressing into the layer (>= 0 for contact).
         shear_force: (Ftx, Fty) (N), shape (2,): the tangential force on the surface.
-        profile: "uniform", "hertz" or "thin" (module docstring); static.
+        profile: "uniform", "hertz", "thin" or "flat" (module docstring); static.
     """
 
     centre: Float[ArrayLike, "2"]
@@ -277,8 +281,10 @@ def load_transform(profile: str, ka: Float[ArrayLike, "..."]) -> Float[Array, ".
     """Hankel transform 2 pi int_0^a f(r) J0(k r) r dr of a unit-force profile f (-), from
     int_0^1 (1 - t^2)^m J0(x t) t dt = 2^m m! J_(m+1)(x) / x^(m+1) (x = k a): 2 J1(x) / x for
     the uniform disc (m = 0), 3 (sin x - x cos x) / x^3 for Hertz's (m = 1/2), 48 J3(x) / x^3
-    for the thin layer's (m = 2)."""
+    for the thin layer's (m = 2), sin x / x for the flat punch's (m = -1/2)."""
     ka = jnp.asarray(ka, dtype=float)
+    if profile == "flat":
+        return jnp.sinc(ka / jnp.pi)  # sin x / x, its value and slopes at x = 0 by jnp's series
     if profile == "uniform":
         return 2.0 * bessel_scaled(ka)[1]
     if profile == "thin":

@@ -54,9 +54,26 @@ def test_bessel_functions_match_scipy():
     x = np.concatenate([np.linspace(0.01, 30.0, 300), np.geomspace(30.0, 3e3, 50)])
     np.testing.assert_allclose(load_transform("thin", x), 48.0 * sp.jv(3, x) / x**3, atol=1e-13)
     np.testing.assert_allclose(load_transform("thin", np.zeros(1)), 1.0, rtol=1e-15)
+    np.testing.assert_allclose(load_transform("flat", x), np.sin(x) / x, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(load_transform("flat", np.zeros(1)), 1.0, rtol=1e-15)
     ka = np.array([1e-3, 0.05, 0.099])  # where the difference above loses digits: its Taylor series
     taylor = 1.0 - ka**2 / 10.0 + ka**4 / 280.0 - ka**6 / 15120.0 + ka**8 / 1330560.0
     np.testing.assert_allclose(load_transform("hertz", ka), taylor, rtol=1e-14)
+
+
+@pytest.mark.parametrize("nu", [0.3, 0.49])
+def test_a_flat_punch_presses_a_thick_layer_down_uniformly(nu):
+    """Boussinesq's rigid flat punch on a half-space (Johnson 1985, eq. 3.36): its pressure
+    Fn / (2 pi a^2 sqrt(1 - r^2 / a^2)) presses the whole face down by Fn (1 - nu) / (4 mu a).
+    On a layer 1e4 a thick the base changes that by about a / h."""
+    h, fn = 1e4 * A, 0.2
+    layer = ElasticLayer(thickness=h, shear_modulus=MU, poisson_ratio=nu)
+    r = np.array([0.0, 0.3, 0.6, 0.8]) * A  # within a / 5 of the edge the window smooths the load (module docstring)
+    w = -np.asarray(
+        layer_displacement(np.stack([r, 0 * r, np.full_like(r, h)], -1), layer=layer, load=_load("flat", fn=fn))
+    )
+    np.testing.assert_allclose(w[:, 2], fn * (1.0 - nu) / (4.0 * MU * A), rtol=2e-4)
+    np.testing.assert_allclose(w[:, 2], w[0, 2], rtol=1e-5)  # flat: the punch's face stays level
 
 
 @pytest.mark.parametrize("nu", [0.3, 0.49])
