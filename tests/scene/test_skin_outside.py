@@ -1,0 +1,60 @@
+"""A skin unlike the example's, read from its spec: a 3 mm, non-square layer magnetised in-plane
+and obliquely, over chips off-centre and at the layer's edge, against magpylib's block at rest;
+and under a press the readings' linearity in J0 and their mirror image under a reversed shear."""
+
+import copy
+
+import jax.numpy as jnp
+import magpylib
+import numpy as np
+import pytest
+from scene_helpers import example
+
+from magdesign.scene import scene_from_spec, with_parameters
+
+CHIPS_MM = [[3.0, 2.0], [15.0, 0.0], [-7.0, 9.0], [5.0, -12.0]]  # off-centre, one on the layer's edge
+CROSS_MM = [[0.0, 0.0], [6.0, 0.0], [-6.0, 0.0], [0.0, 6.0], [0.0, -6.0]]
+
+
+def outside_skin(direction, chips_mm, cells=(6, 6, 2)):
+    """A 30 x 24 x 3 mm layer of 20 mT along ``direction`` over ``chips_mm`` 2 mm below the
+    board, no effects, pressed at the centre."""
+    spec = copy.deepcopy(example("skin"))
+    spec["scene"] = {}
+    spec["magnet"].update(direction=list(direction), cells=list(cells))
+    spec["mechanics"].update(thickness="3 mm", size=["30 mm", "24 mm"], poisson_ratio=0.45)
+    spec["sensor"].update(chips=[[f"{x} mm", f"{y} mm"] for x, y in chips_mm], depth="2 mm", map_grid=[1, 1])
+    spec["load"].update(contact_x=["0 mm", "0 mm"], contact_y=["0 mm", "0 mm"])
+    return scene_from_spec(spec)
+
+
+@pytest.mark.slow  # compiles the layer's field: about half a minute on two cores
+@pytest.mark.parametrize("direction", [(1.0, 0.0, 0.0), (0.6, 0.0, 0.8)])
+def test_an_inplane_non_square_layer_at_rest_reads_magpylibs_block(direction):
+    scene = outside_skin(direction, CHIPS_MM)
+    got = np.asarray(scene.readings_at(jnp.zeros(5)))
+    block = magpylib.magnet.Cuboid(
+        polarization=0.02 * np.asarray(direction), dimension=(0.03, 0.024, 0.003), position=(0.0, 0.0, 0.0015)
+    )
+    sensors = np.concatenate([np.asarray(CHIPS_MM) * 1e-3, np.full((len(CHIPS_MM), 1), -2e-3)], axis=-1)
+    np.testing.assert_allclose(got, block.getB(sensors), rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.slow  # compiles the layer's field under a load: about a minute on two cores
+def test_a_press_is_linear_in_j0_and_a_reversed_shear_mirrors_the_readings():
+    scene = outside_skin((0.0, 0.0, 1.0), CROSS_MM, cells=(8, 8, 2))
+    rest = np.asarray(scene.readings_at(jnp.zeros(5)))
+    forward = np.asarray(scene.readings_at(jnp.array([0.0, 0.0, 0.3, 0.05, 0.0]))) - rest
+    backward = np.asarray(scene.readings_at(jnp.array([0.0, 0.0, 0.3, -0.05, 0.0]))) - rest
+    assert np.max(np.abs(forward)) > 1e-5  # the press moves the centre chip's Bz by tens of uT
+    # the field is linear in the polarisation, at rest and under the load alike
+    stronger = with_parameters(scene, {"magnet.polarization": 0.05})
+    np.testing.assert_allclose(
+        np.asarray(stronger.readings_at(jnp.array([0.0, 0.0, 0.3, 0.05, 0.0]))) - 2.5 * rest,
+        2.5 * forward,
+        rtol=1e-9,
+        atol=1e-12,
+    )
+    # the mirror x -> -x maps the +x shear onto the -x one: chips at +-6 mm swap, Bx changes sign
+    mirrored = backward[[0, 2, 1, 3, 4]] * np.array([-1.0, 1.0, 1.0])
+    np.testing.assert_allclose(mirrored, forward, rtol=1e-9, atol=1e-12)
