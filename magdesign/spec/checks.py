@@ -130,7 +130,7 @@ def check_domain(name: str, value: float, *, key: str | None = None, unit: str =
         above = high is not None and (value > high or (value == high and not high_ok))
         if below or above:
             raise SpecError(
-                f"{key}: {value:g} {unit or '(SI)'} is not physical; expected a value in {domain_text(entry.domain)}"
+                f"{key}: {value:g}{_unit_text(unit)} is not physical; expected a value in {domain_text(entry.domain)}"
             )
     if _plain(written) and unit not in ("", "1"):
         message = _plain_advice(entry.plausible_range(unit), key, written, unit)
@@ -143,6 +143,11 @@ def check_domain(name: str, value: float, *, key: str | None = None, unit: str =
             PlausibilityWarning,
             stacklevel=3,
         )
+
+
+def _unit_text(unit: str) -> str:
+    """A value's unit after it in a message: none for a ratio ("1"), "(SI)" where unknown."""
+    return "" if unit == "1" else f" {unit or '(SI)'}"
 
 
 def _plain(written) -> bool:

@@ -496,7 +496,14 @@ def _keys():
         Key("mechanics.shear_modulus", q, "shear modulus mu (neo-Hookean, skin)", "Pa", R, POSITIVE, MODULUS),
         Key("mechanics.bulk_modulus", q, "neo-Hookean bulk modulus K", "Pa", R, POSITIVE, MODULUS),
         Key("mechanics.youngs_modulus", q, "linear Young's modulus E", "Pa", R, POSITIVE, MODULUS),
-        Key("mechanics.poisson_ratio", q, "Poisson's ratio nu (linear, skin)", "1", R, (-1.0, False, 0.5, False)),
+        Key(
+            "mechanics.poisson_ratio",
+            q,
+            "Poisson's ratio nu (linear: below 0.5; skin: 0.5 exact)",
+            "1",
+            R,
+            (-1.0, False, 0.5, True),
+        ),
         Key(
             "mechanics.spring",
             q,

@@ -65,9 +65,14 @@ def _material(table):
             mu=jnp.asarray(table.quantity("shear_modulus", "Pa")),
             bulk=jnp.asarray(table.quantity("bulk_modulus", "Pa")),
         )
-    return LinearElastic(
-        E=jnp.asarray(table.quantity("youngs_modulus", "Pa")), nu=jnp.asarray(table.quantity("poisson_ratio", "1"))
-    )
+    youngs, poisson = table.quantity("youngs_modulus", "Pa"), table.quantity("poisson_ratio", "1")
+    if poisson >= 0.5:
+        raise SpecError(
+            f"{table.name}.poisson_ratio: {poisson:g} makes a linear material incompressible (an infinite bulk "
+            "modulus, no volume change under pressure); expected a value below 0.5, e.g. 0.49 (a skin's bonded "
+            "layer takes 0.5 exactly)"
+        )
+    return LinearElastic(E=jnp.asarray(youngs), nu=jnp.asarray(poisson))
 
 
 def check_wall(thickness, outer_radius, key="mechanics.thickness"):
