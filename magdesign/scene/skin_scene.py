@@ -66,6 +66,7 @@ shear, with the chips' noise (``noise``, T per axis):
                            sweep over the chips' range (-)
 """
 
+import math
 from typing import ClassVar
 
 import equinox as eqx
@@ -73,7 +74,9 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
+from magdesign.fields.layer_field import finer, gauss_levels, layer_field
 from magdesign.mechanics.skin_layer import (
     ElasticLayer,
     SpectralGrid,
@@ -94,6 +97,28 @@ CONTACT_FORCE_FLOOR = 1e-3
 BACKGROUND_REFERENCE = 50 * uT
 # The unknowns of a load point and their units, the order of the Jacobian's columns.
 LOAD_UNKNOWNS = ("x", "y", "normal", "shear_x", "shear_y")
+# The uniformly magnetised layer's field models (module docstring).
+FIELD_MODELS = ("linear", "cells")
+# The linear model's default resolution: in-plane nodes at most 1 / NODES_PER_DEPTH of the
+# chips' depth apart, and GAUSS_NODES heights through the thickness (module docstring).
+NODES_PER_DEPTH = 2.0
+GAUSS_NODES = 6
+
+
+def default_resolution(size, depth) -> tuple[int, int, int]:
+    """The linear field's default (n_x, n_y, Gauss nodes) for a layer of sides ``size`` (m,
+    (2,)) over chips ``depth`` (m) below it, from their concrete values (module docstring)."""
+    sides, depth = _concrete(size), _concrete(depth)
+    if sides is None or depth is None:
+        raise ValueError("default_resolution needs the concrete size and depth (not traced values)")
+    n = [max(2, math.ceil(NODES_PER_DEPTH * float(side) / float(depth))) for side in sides]
+    return (n[0], n[1], GAUSS_NODES)
+
+
+def band_limited_grid(periods: tuple[int, int], levels: int) -> SpectralGrid:
+    """The linear field's wavevector lattice: ``periods`` (P_x, P_y) cells, cut at the node
+    grid's own wavenumbers on each of ``levels`` heights (:mod:`magdesign.fields.layer_field`)."""
+    return SpectralGrid(periods=tuple(periods), refine=((1, 1),) * levels)
 
 
 def _chip_pairs(chips) -> tuple[tuple[Float[Array, ""], Float[Array, ""]], ...]:
@@ -145,10 +170,21 @@ class SkinScene(AbstractScene):
     spectral: SpectralGrid | None = eqx.field(static=True, default=None)
     pitch: Float[Array, ""] | None = None
     magnets: SkinMagnets | None = None
+    field: str = eqx.field(static=True, default="linear")
+    resolution: tuple[int, int, int] | None = eqx.field(static=True, default=None)
 
     def __post_init__(self):
-        # the cells' wavevector lattice, from the layer's values at construction (module docstring)
-        if self.spectral is None:
+        if self.field not in FIELD_MODELS:
+            raise ValueError(f"field must be one of {FIELD_MODELS}, got {self.field!r}")
+        # the wavevector lattice and the linear field's nodes, from the values at construction
+        # (module docstring)
+        if self.field == "linear" and self.resolution is None:
+            self.resolution = default_resolution(self.size, self.depth)
+        if self.spectral is None and self.field == "linear":
+            nx, ny, nodes = self.resolution
+            plane = spectral_grid(size=self.size, thickness=self.thickness, cells=(nx, ny, 1))
+            self.spectral = band_limited_grid(plane.periods, nodes)
+        elif self.spectral is None:
             self.spectral = spectral_grid(size=self.size, thickness=self.thickness, cells=self.cells)
 
     SOURCE_KEY: ClassVar = "magnet.polarization"
@@ -210,13 +246,50 @@ class SkinScene(AbstractScene):
         force = jnp.maximum(normal_force, CONTACT_FORCE_FLOOR)
         return (3.0 * force * self.sphere_radius / (4.0 * e_star)) ** (1.0 / 3.0)
 
-    def source_field(self, points, displacement):
-        load = SurfaceLoad(
-            centre=displacement[:2],
-            radius=self.contact_radius(displacement[2]),
-            normal_force=displacement[2],
-            shear_force=displacement[3:5],
+    def surface_load(self, state: Float[Array, "5"]) -> SurfaceLoad:
+        """The sphere's load of a load state (x, y, Fn, F_x, F_y) (m, m, N, N, N)."""
+        return SurfaceLoad(
+            centre=state[:2], radius=self.contact_radius(state[2]), normal_force=state[2], shear_force=state[3:5]
         )
+
+    def linear_field(self, points, load: SurfaceLoad, resolution=None):
+        """The uniformly magnetised layer's field B (T) at ``points`` (m, (..., 3)) under
+        ``load``, first order in the displacement (:func:`magdesign.fields.layer_field.layer_field`),
+        at ``resolution`` (n_x, n_y, Gauss nodes; static): the scene's, or its :func:`finer`
+        one (the lattice's periods, a length, kept)."""
+        resolution = self.resolution if resolution is None else tuple(resolution)
+        factor = resolution[0] // self.resolution[0]
+        grid = self.spectral
+        if resolution != self.resolution:
+            grid = band_limited_grid(tuple(factor * p for p in grid.periods), resolution[2])
+        heights, _ = gauss_levels(resolution[2])
+        u, rotation = layer_displacement_grid(
+            layer=self.layer(), load=load, size=self.size, cells=resolution, grid=grid, levels=tuple(heights)
+        )
+        return layer_field(
+            points,
+            size=self.size,
+            thickness=self.thickness,
+            polarization=self.polarization * jnp.asarray(self.direction),
+            displacement=u,
+            rotation=rotation,
+        )
+
+    def field_error(self, state: Float[Array, "5"]) -> Float[Array, "s 3"]:
+        """The linear field's discretisation error at the chips (T, scene frame), (S, 3),
+        under one load state (x, y, Fn, F_x, F_y): its change from the scene's resolution to
+        the :func:`~magdesign.fields.layer_field.finer` one (module docstring)."""
+        if self.field != "linear" or self.magnets is not None:
+            raise ValueError("field_error: only a uniformly magnetised layer's linear field has an estimate")
+        points, _ = self.sensor_poses()
+        load = self.surface_load(state)
+        coarse = self.linear_field(points, load)
+        return jnp.abs(self.linear_field(points, load, finer(self.resolution)) - coarse)
+
+    def source_field(self, points, displacement):
+        load = self.surface_load(displacement)
+        if self.magnets is None and self.field == "linear":
+            return self.linear_field(points, load)
         if self.magnets is not None:
             # the discrete magnets, each carried by the layer's displacement and rotation at its centre
             dimension = self.magnets.sizes

@@ -31,6 +31,7 @@ def skin(**changes):
         noise=jnp.full(3, 1 * uT),
         hall=mlx90393(),
         effects=(),
+        field="cells",
         cells=(8, 8, 1),
         map_grid=(2, 2),
     )
