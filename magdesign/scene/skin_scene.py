@@ -5,8 +5,7 @@ skins", 2021), pressed by a rigid sphere.
 Scene frame: the board's surface is z = 0; the layer (thickness h, sides L_x x L_y,
 centred on the origin) fills 0 <= z <= h, bonded to the board; the chips' sensing points
 sit ``depth`` below the surface, at the given (x, y). The layer carries a uniform
-polarization J = J0 d (T, d a static unit vector: through the thickness or in-plane), cut
-into cuboid cells (:mod:`magdesign.fields.cells`). The chips' positions are each a pair of
+polarization J = J0 d (T, d a static unit vector: through the thickness or in-plane). The chips' positions are each a pair of
 scalars (x, y), so that a design can move one chip along one axis (``sensor.chips[i][k]``);
 a grid's chips are its unit offsets times ``pitch`` (``sensor.pitch``), so that a design can
 space the whole grid.
@@ -17,21 +16,34 @@ a = (3 Fn R / (4 E*))^(1/3) with Hertz's pressure and a shear traction of the sa
 (:mod:`magdesign.mechanics.skin_layer`; the half-space contact radius holds for a / h up to
 about 0.3 and is 3 % off at 0.5); below the force CONTACT_FORCE_FLOOR the patch keeps that
 force's radius (the displacement, proportional to the forces on a given patch, is then nil
-anyway). The layer's
-displacement field (linear elasticity: displacements small against h) moves the cells and
-turns their polarization with the material's rotation, as rigid particles turn
-(:func:`magdesign.fields.cells.carried_cells`); the chips read the moved cells' field. The
-displacement and rotation at the cells' centres come from the layer's Fourier sums on the
-cell grid (:func:`magdesign.mechanics.skin_layer.layer_displacement_grid`, about 1e-4 of the
-peak displacement from the Hankel quadrature's values), on the lattice ``spectral`` (static:
-:func:`~magdesign.mechanics.skin_layer.spectral_grid` of the size and thickness the scene is
-built with, unless given).
+anyway).
 
-The cells move rigidly, so a cell as thick as the layer moves its bonded bottom face with
-its centre: the field's change converges as the cells thin. Under a centred press, at the
-centre chip 1 mm below a 2 mm layer of 20 x 20 cells, the change was -246, 28, 114, 137 and
-143 uT at n_z = 1, 2, 4, 8 and 16 cells through the thickness: the error falls as n_z^-2
-from n_z = 2 on (21 % at 4, 5 % at 8, 1.4 % at 16).
+The layer's displacement field (linear elasticity: displacements small against h) moves its
+particles and turns them with the material's rotation curl(u) / 2. Two field models
+(``field``, static):
+
+- ``"linear"`` (the default): the field to first order in the displacement, the block's
+  exact field plus the integral of the moved and turned particles' dipoles over the layer
+  (:func:`magdesign.fields.layer_field.layer_field`), on ``resolution`` (n_x, n_y, Gauss
+  nodes; static: by :func:`default_resolution`, 2 nodes per ``depth`` across the layer and
+  GAUSS_NODES through it, from the concrete values at construction). The displacement and
+  rotation at the nodes come from the layer's Fourier sums
+  (:func:`magdesign.mechanics.skin_layer.layer_displacement_grid`) cut at the node grid's own
+  wavenumbers (:func:`band_limited_grid`, the reason in the field's module). Its
+  discretisation error is :meth:`SkinScene.field_error`, the change to the finer resolution
+  (:func:`~magdesign.fields.layer_field.finer`); at the default it is about 0.1-0.2 % of
+  the largest change of the field at the chips under a press.
+- ``"cells"``: the layer cut into ``cells`` rigid cuboid cells
+  (:mod:`magdesign.fields.cells`), each moved by the displacement at its centre and turned by
+  the rotation there (:func:`magdesign.fields.cells.carried_cells`), the displacement and
+  rotation from the Fourier sums on the cell grid (about 1e-4 of the peak displacement from
+  the Hankel quadrature's values) on the lattice ``spectral`` (static:
+  :func:`~magdesign.mechanics.skin_layer.spectral_grid` of the size and thickness the scene is
+  built with, unless given). A cell as thick as the layer moves its bonded bottom face with
+  its centre: the field's change converges as the cells thin. Under a centred press, at the
+  centre chip 1 mm below a 2 mm layer of 20 x 20 cells, the change was -246, 28, 114, 137 and
+  143 uT at n_z = 1, 2, 4, 8 and 16 cells through the thickness: the error falls as n_z^-2
+  from n_z = 2 on (21 % at 4, 5 % at 8, 1.4 % at 16), and the outputs converge worse.
 
 An eFlesh-like skin (Pattabiraman et al., "eFlesh: highly customizable magnetic touch
 sensing using cut-cell microstructures", 2025: a printed soft lattice carrying small magnets
@@ -143,10 +155,13 @@ class SkinMagnets(eqx.Module):
 class SkinScene(AbstractScene):
     """A magnetic skin over a chip array (module docstring); lengths (m), J0 (T), moduli (Pa).
 
-    ``direction`` (static): the polarization's unit vector; ``cells`` (static): the layer's
-    cells (n_x, n_y, n_z); ``map_grid`` (static): the outputs' contact positions (n_x, n_y);
-    ``spectral`` (static): the cells' wavevector lattice, by default chosen from the concrete
-    size and thickness at construction (module docstring). ``chips``: each chip's (x, y)
+    ``direction`` (static): the polarization's unit vector; ``field`` (static): "linear" or
+    "cells" (module docstring); ``resolution`` (static): the linear field's nodes (n_x, n_y,
+    Gauss nodes), by default :func:`default_resolution`'s; ``cells`` (static): the layer's
+    cells (n_x, n_y, n_z) of the "cells" field; ``map_grid`` (static): the outputs' contact
+    positions (n_x, n_y); ``spectral`` (static): the field's wavevector lattice (the linear
+    field's or the cells'), by default chosen from the concrete size and thickness at
+    construction (module docstring). ``chips``: each chip's (x, y)
     (m), given as an (S, 2) array and kept as pairs of scalars (each a design parameter); in
     units of ``pitch`` (m) where a pitch is given (a grid's unit offsets): the chips then sit
     at ``chips * pitch`` (:meth:`chip_positions`). ``magnets``: discrete magnets in an

@@ -160,3 +160,46 @@ def test_the_change_matches_an_independent_integral(load):
     assert np.max(np.abs(fine - reference)) < 6e-3 * scale
     estimate = np.abs(coarse - fine)
     assert np.all(np.abs(coarse - reference) <= estimate + 6e-3 * scale)
+
+
+@pytest.mark.slow
+def test_the_rigid_cells_converge_to_it():
+    # a load a thousandth of the one above (the cells' rigid moves are exact, so their
+    # nonlinearity is of order u / depth, nil here): the cells at n_z = 4, 8, 16 through the
+    # thickness (40 x 40 across, fine enough in the plane) approach the linear field as n_z^-2,
+    # and Richardson's extrapolation agrees with it within its own estimate
+    scale = 1e-3
+    load = SurfaceLoad(
+        centre=SHEARED.centre,
+        radius=SHEARED.radius,
+        normal_force=SHEARED.normal_force * scale,
+        shear_force=SHEARED.shear_force * scale,
+    )
+    layers = {}
+    for n_z in (4, 8, 16):
+        grid = (40, 40, n_z)
+        centres, dimension = layer_cells(size=SIZE, thickness=THICKNESS, cells=grid)
+        u, rotation = layer_displacement_grid(
+            layer=LAYER,
+            load=load,
+            size=jnp.asarray(SIZE),
+            cells=grid,
+            grid=spectral_grid(size=SIZE, thickness=THICKNESS, cells=grid),
+        )
+        moved, turned = carried_cells(
+            centres,
+            jnp.broadcast_to(jnp.asarray(POLARIZATION), centres.shape),
+            u.reshape(-1, 3),
+            rotation.reshape(-1, 3),
+        )
+        field = cells_field(CHIPS, centres=moved, dimension=dimension, polarization=turned)
+        layers[n_z] = (np.asarray(field) - block(CHIPS)) / scale
+    expected = (np.asarray(linear(CHIPS, load, (40, 40, 10))) - block(CHIPS)) / scale
+    # the centre chip's Bz: successive differences in the ratio 4 of the n_z^-2 rate
+    ratio = (layers[8] - layers[4])[0, 2] / (layers[16] - layers[8])[0, 2]
+    assert 3.0 < ratio < 5.0
+    extrapolated = layers[16] + (layers[16] - layers[8]) / 3.0
+    estimate = np.abs(layers[16] - layers[8]) / 3.0
+    assert np.all(np.abs(extrapolated - expected) <= estimate + 1e-3 * np.max(np.abs(expected)))
+    # and the cells at n_z = 16 are still several times farther off than that
+    assert np.max(np.abs(layers[16] - expected)) > 5 * np.max(np.abs(extrapolated - expected))
