@@ -193,9 +193,10 @@ class SkinScene(AbstractScene):
             raise ValueError(f"field must be one of {FIELD_MODELS}, got {self.field!r}")
         # the wavevector lattice and the linear field's nodes, from the values at construction
         # (module docstring)
-        if self.field == "linear" and self.resolution is None:
+        linear = self.field == "linear" and self.magnets is None
+        if linear and self.resolution is None:
             self.resolution = default_resolution(self.size, self.depth)
-        if self.spectral is None and self.field == "linear":
+        if self.spectral is None and linear:
             nx, ny, nodes = self.resolution
             plane = spectral_grid(size=self.size, thickness=self.thickness, cells=(nx, ny, 1))
             self.spectral = band_limited_grid(plane.periods, nodes)
