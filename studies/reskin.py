@@ -37,6 +37,7 @@ from magdesign.design import solve
 from magdesign.design.tolerance import perturb
 from magdesign.mechanics.skin_layer import SpectralGrid, spectral_grid
 from magdesign.scene import loads_from_spec, outputs, with_parameters
+from magdesign.scene.skin_scene import band_limited_grid
 from magdesign.spec.design import problem_from_spec
 from magdesign.spec.tolerance import tolerance_problem_from_spec
 from magdesign.units import mm, mT
@@ -90,11 +91,13 @@ DETECTION_SIGMAS = 3.0  # a force is "detected" at three standard deviations of 
 
 PITCHES = {True: (6 * mm, 7 * mm, 8 * mm), False: (5 * mm, 6 * mm, 7 * mm, 8 * mm, 9 * mm)}
 THICKNESSES = {True: (2 * mm, 3 * mm), False: (1.5 * mm, 2 * mm, 2.5 * mm, 3 * mm)}
-# Cells and map: quick mode checks the pipeline only (2 cells through the thickness leave the
-# field's change ~80 % off, docs/skins.md, and 4 across the chips leave the press unresolved);
-# full mode's 6 through the thickness are ~10 % off (n_z^-2 from 21 % at 4), and one evaluation
-# of the outputs costs ~40 s on two loaded cores, so its sweep and Monte Carlo stay small
-CELLS = {True: (4, 4, 2), False: (8, 8, 6)}
+# The linear field's nodes (the default for chips 1 mm deep under a 20 mm skin) and the map:
+# quick mode checks the pipeline only (its 2 x 2 map holds only the corners of the chips'
+# box). At these nodes the bounds are within 0.5 % of a twice finer resolution's
+# (docs/skins.md), and the field's lattice periods (the sweep's thickest layer's) leave them
+# as they are; half as many nodes across move the field's change by about 1 % and the
+# worst-case bounds, which hang on the smallest signals, by 10 %.
+RESOLUTION = {True: (40, 40, 6), False: (40, 40, 6)}
 MAP_GRID = {True: (2, 2), False: (5, 5)}
 SAMPLES = {True: 8, False: 40}
 # The sweep's cells whose spreads are computed (17 evaluations each): two corners in quick
@@ -143,7 +146,7 @@ def skin_spec(chips, *, quick: bool, normal: float = DETECTED_FORCE, contact=(0.
             "shape": "skin",
             "polarization": f"{POLARIZATION} T",
             "direction": [0, 0, 1],
-            "cells": list(CELLS[quick]),
+            "resolution": list(RESOLUTION[quick]),
         },
         "mechanics": {
             "model": "bonded_layer",
@@ -201,11 +204,11 @@ def tolerance_spec(chips, *, quick: bool) -> dict:
 
 def shared_grid(scene, thicknesses) -> SpectralGrid:
     """One wavevector lattice for every thickness swept: the thickest layer's periods (the
-    most padding) and the thinnest's refinement (the deepest reach), so that a single
-    compiled scene structure serves the whole sweep at the accuracy of each thickness's own."""
-    thick = spectral_grid(size=scene.size, thickness=max(thicknesses), cells=scene.cells)
-    thin = spectral_grid(size=scene.size, thickness=min(thicknesses), cells=scene.cells)
-    return SpectralGrid(periods=thick.periods, refine=thin.refine)
+    most padding), cut at the nodes' own wavenumbers as at every thickness, so that a single
+    compiled scene structure serves the whole sweep."""
+    nx, ny, nodes = scene.resolution
+    thick = spectral_grid(size=scene.size, thickness=max(thicknesses), cells=(nx, ny, 1))
+    return band_limited_grid(thick.periods, nodes)
 
 
 evaluate = eqx.filter_jit(outputs)
@@ -336,7 +339,7 @@ def main(argv=None):
         f"{POLARIZATION_TOLERANCE}, each chip's placement {PLACEMENT_TOLERANCE} per axis) are assumed too."
     )
     report.text(
-        f"Cells {CELLS[quick]} through the layer, the bounds' map {MAP_GRID[quick]} contact positions over the chips' "
+        f"The layer's linear field at {RESOLUTION[quick]} nodes (across, across, through), the bounds' map {MAP_GRID[quick]} contact positions over the chips' "
         f"bounding box. {QUICK_NOTE if quick else FULL_NOTE}"
     )
 
@@ -421,7 +424,7 @@ def main(argv=None):
             "depth": DEPTH,
             "sphere_radius": SPHERE,
             "skin_side": SKIN_SIDE,
-            "cells": CELLS[quick],
+            "resolution": RESOLUTION[quick],
             "map_grid": MAP_GRID[quick],
         },
     )
@@ -445,17 +448,16 @@ def main(argv=None):
 
 
 QUICK_NOTE = (
-    "Quick mode checks the study's pipeline, not ReSkin: at 2 cells through the thickness the field's change under a "
-    "press is about 80 % off (docs/skins.md: 28 against 143 uT under a centred press), 4 cells across the chips do "
-    "not resolve the 0.7 mm contact patch, and the 2 x 2 map holds only the corners of the chips' box, where the "
-    "bounds are far from their worst. Its bounds are not ReSkin's; full mode's are."
+    "Quick mode checks the study's pipeline: its field is full mode's, but its 2 x 2 map holds only the corners of "
+    "the chips' box (at ReSkin's design the worst bounds lie there too), and its sweep and Monte Carlo are small."
 )
 FULL_NOTE = (
-    "The field's change is about 10 % off at 6 cells through the thickness (docs/skins.md: n_z^-2 from 21 % at 4); "
-    "across, the worst point's normal-force bound is not converged: a trial at ReSkin's design (5 x 5 map) gave "
-    "44 mN at cells (8, 8, 6) and 0.28 N at (12, 12, 6), its localisation 0.25 and 0.46 mm worst, 47 and 67 um "
-    "median. Read the worst-case bounds as their order, the medians as firmer; the crosstalk column says how "
-    "nearly the normal force and the shear are confounded at the map's worst point."
+    "The field is the layer's linear field (first order in the displacement), converged: at ReSkin's design (5 x 5 "
+    "map) the worst normal-force bound is 82.1 mN at these nodes and 82.5 mN at twice as many across and 10 through, "
+    "the worst localisation 2.03 mm at both, the median 0.80 mm (docs/skins.md). The rigid cells used before gave "
+    "10.7 mN, 44 mN and 0.28 N at cells (4, 4, 2), (8, 8, 6) and (12, 12, 6), and medians of 47-67 um: they had "
+    "not converged. The crosstalk "
+    "column says how nearly the normal force and the shear are confounded at the map's worst point."
 )
 UNITS = {
     "force_resolution_normal": "N",

@@ -33,10 +33,11 @@ KERNEL_BATCH_BYTES = 1 << 28
 _BYTES_PER_TENSOR = 8 * 9 * FAR_NODES**3
 
 
-def kernel_batches(fn, rows, tensors_per_row):
-    """``fn`` over ``rows`` (leading axis), in batches whose cell-kernel temporaries, for
-    ``tensors_per_row`` cuboid tensors per row, stay within KERNEL_BATCH_BYTES."""
-    size = max(1, min(rows.shape[0], KERNEL_BATCH_BYTES // (_BYTES_PER_TENSOR * tensors_per_row)))
+def kernel_batches(fn, rows, tensors_per_row, bytes_per_tensor=_BYTES_PER_TENSOR):
+    """``fn`` over ``rows`` (leading axis), in batches whose kernel temporaries, for
+    ``tensors_per_row`` kernels per row of ``bytes_per_tensor`` each (by default a cuboid
+    tensor's far form), stay within KERNEL_BATCH_BYTES."""
+    size = max(1, min(rows.shape[0], KERNEL_BATCH_BYTES // (bytes_per_tensor * tensors_per_row)))
     return jax.lax.map(fn, rows, batch_size=size)
 
 

@@ -415,18 +415,30 @@ class SpectralGrid:
     refine: tuple[tuple[int, int], ...]
 
 
-def spectral_grid(*, size, thickness, cells: tuple[int, int, int]) -> SpectralGrid:
+def _level_heights(cells, levels):
+    """The levels' heights as fractions of the thickness, bottom to top: ``levels``, or the
+    midpoints of ``cells[2]`` equal cells."""
+    if levels is None:
+        return (np.arange(cells[2]) + 0.5) / cells[2]
+    levels = np.asarray(levels, dtype=float)
+    if levels.shape != (cells[2],) or not np.all((levels > 0.0) & (levels < 1.0)):
+        raise ValueError(f"levels must be {cells[2]} fractions of the thickness in (0, 1), got {levels}")
+    return levels
+
+
+def spectral_grid(*, size, thickness, cells: tuple[int, int, int], levels=None) -> SpectralGrid:
     """The lattice for a layer of sides ``size`` (L_x, L_y) (m) and ``thickness`` h (m) cut
     into ``cells`` (n_x, n_y, n_z), from their concrete values (module docstring): periods
-    of at least L + SPECTRAL_PADDING h, and at each level, its centre d below the top, a
-    lattice reaching k d >= SPECTRAL_REACH."""
+    of at least L + SPECTRAL_PADDING h, and at each level, d below the top, a lattice
+    reaching k d >= SPECTRAL_REACH. The levels are the cells' centres, or ``levels`` (static:
+    n_z heights as fractions of h, bottom to top, as :func:`layer_displacement_grid` takes)."""
     sides, h = _concrete(size), _concrete(thickness)
     if sides is None or h is None:
         raise ValueError("spectral_grid needs the concrete size and thickness (not traced values)")
     sides, h = np.asarray(sides, dtype=float), float(h)
     side = sides / np.asarray(cells[:2])
     periods = tuple(int(n + math.ceil(SPECTRAL_PADDING * h / s)) for n, s in zip(cells[:2], side))
-    depths = (cells[2] - np.arange(cells[2]) - 0.5) * h / cells[2]  # bottom to top
+    depths = (1.0 - _level_heights(cells, levels)) * h  # bottom to top
     refine = tuple(tuple(max(1, math.ceil(SPECTRAL_REACH * s / (math.pi * d))) for s in side) for d in depths)
     return SpectralGrid(periods=periods, refine=refine)
 
@@ -438,17 +450,21 @@ def layer_displacement_grid(
     size: Float[ArrayLike, "2"],
     cells: tuple[int, int, int],
     grid: SpectralGrid,
+    levels=None,
 ) -> tuple[Float[Array, "nx ny nz 3"], Float[Array, "nx ny nz 3"]]:
     """Displacement u (m) and rotation curl(u) / 2 (rad) at the centres of a layer's cells
-    (those of :func:`magdesign.fields.cells.layer_cells` with bottom 0), by a 2-D Fourier
-    sum per level of cells (module docstring).
+    (those of :func:`magdesign.fields.cells.layer_cells` with bottom 0), or at the cells'
+    in-plane centres on given heights, by a 2-D Fourier sum per level (module docstring).
 
     Args:
         layer: the layer (its thickness is the cells' height).
         load: the surface load.
         size: the layer's sides (L_x, L_y) (m), centred on x = y = 0.
         cells: (n_x, n_y, n_z) (static).
-        grid: the wavevector lattice (static), e.g. :func:`spectral_grid`'s.
+        grid: the wavevector lattice (static), e.g. :func:`spectral_grid`'s, one entry of
+            ``refine`` per level.
+        levels: the heights (static), n_z fractions of the thickness in (0, 1), bottom to
+            top; None: the cells' midpoints (level + 1/2) / n_z.
 
     Returns:
         (u, rotation), each (n_x, n_y, n_z, 3): C order over the cells, as layer_cells lists them.
@@ -461,8 +477,11 @@ def layer_displacement_grid(
     start = -0.5 * jnp.array([nx - 1, ny - 1]) * side - centre
     fn = load.normal_force
     fx, fy = jnp.asarray(load.shear_force, dtype=float)
-    levels = []
-    for level, (rx, ry) in enumerate(grid.refine):
+    heights = _level_heights(cells, levels)
+    if len(grid.refine) != nz:
+        raise ValueError(f"grid.refine must have one entry per level ({nz}), got {len(grid.refine)}")
+    planes = []
+    for height, (rx, ry) in zip(heights, grid.refine):
         # the lattice |m_x| <= (r_x P_x - 1) / 2 (an even count's unpaired -M dropped) by
         # 0 <= m_y <= (r_y P_y - 1) / 2: the field is real, so the modes -m are the conjugates
         # of m, and the half m_y > 0 counts twice in the real part of the sum. Along y it is
@@ -478,7 +497,7 @@ def layer_displacement_grid(
         zero = (mx[:, None] == 0) & (my[None, :] == 0)
         k = jnp.sqrt(jnp.where(zero, (ZERO_MODE_KH / h) ** 2, kx * kx + ky * ky))
         ex, ey = jnp.where(zero, 1.0, kx / k), jnp.where(zero, 0.0, ky / k)
-        z = jnp.reshape((level + 0.5) * h / nz, (1, 1))
+        z = jnp.reshape(height * h, (1, 1))
         kernels, slopes = jax.jvp(lambda zz: _kernels(k.ravel(), zz, layer), (z,), (jnp.ones_like(z),))
         U_L, W_L, U_z, W_z, V_T = (f.reshape(k.shape) for f in kernels)
         dU_L, _, dU_z, _, dV_T = (f.reshape(k.shape) for f in slopes)
@@ -496,8 +515,8 @@ def layer_displacement_grid(
         # sampled at the cells only, the lattice folds onto the cell grid's own (period P)
         folded = spectrum.reshape(6, rx, px, -(-ry // 2), py).sum(axis=(1, 3))
         folded = jnp.roll(folded, mx[0], axis=1)
-        levels.append(jnp.fft.ifft2(folded).real[:, :nx, :ny])
-    fields = jnp.stack(levels, axis=-1)  # (6, n_x, n_y, n_z)
+        planes.append(jnp.fft.ifft2(folded).real[:, :nx, :ny])
+    fields = jnp.stack(planes, axis=-1)  # (6, n_x, n_y, n_z)
     return jnp.moveaxis(fields[:3], 0, -1), 0.5 * jnp.moveaxis(fields[3:], 0, -1)
 
 

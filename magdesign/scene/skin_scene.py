@@ -5,8 +5,7 @@ skins", 2021), pressed by a rigid sphere.
 Scene frame: the board's surface is z = 0; the layer (thickness h, sides L_x x L_y,
 centred on the origin) fills 0 <= z <= h, bonded to the board; the chips' sensing points
 sit ``depth`` below the surface, at the given (x, y). The layer carries a uniform
-polarization J = J0 d (T, d a static unit vector: through the thickness or in-plane), cut
-into cuboid cells (:mod:`magdesign.fields.cells`). The chips' positions are each a pair of
+polarization J = J0 d (T, d a static unit vector: through the thickness or in-plane). The chips' positions are each a pair of
 scalars (x, y), so that a design can move one chip along one axis (``sensor.chips[i][k]``);
 a grid's chips are its unit offsets times ``pitch`` (``sensor.pitch``), so that a design can
 space the whole grid.
@@ -17,21 +16,34 @@ a = (3 Fn R / (4 E*))^(1/3) with Hertz's pressure and a shear traction of the sa
 (:mod:`magdesign.mechanics.skin_layer`; the half-space contact radius holds for a / h up to
 about 0.3 and is 3 % off at 0.5); below the force CONTACT_FORCE_FLOOR the patch keeps that
 force's radius (the displacement, proportional to the forces on a given patch, is then nil
-anyway). The layer's
-displacement field (linear elasticity: displacements small against h) moves the cells and
-turns their polarization with the material's rotation, as rigid particles turn
-(:func:`magdesign.fields.cells.carried_cells`); the chips read the moved cells' field. The
-displacement and rotation at the cells' centres come from the layer's Fourier sums on the
-cell grid (:func:`magdesign.mechanics.skin_layer.layer_displacement_grid`, about 1e-4 of the
-peak displacement from the Hankel quadrature's values), on the lattice ``spectral`` (static:
-:func:`~magdesign.mechanics.skin_layer.spectral_grid` of the size and thickness the scene is
-built with, unless given).
+anyway).
 
-The cells move rigidly, so a cell as thick as the layer moves its bonded bottom face with
-its centre: the field's change converges as the cells thin. Under a centred press, at the
-centre chip 1 mm below a 2 mm layer of 20 x 20 cells, the change was -246, 28, 114, 137 and
-143 uT at n_z = 1, 2, 4, 8 and 16 cells through the thickness: the error falls as n_z^-2
-from n_z = 2 on (21 % at 4, 5 % at 8, 1.4 % at 16).
+The layer's displacement field (linear elasticity: displacements small against h) moves its
+particles and turns them with the material's rotation curl(u) / 2. Two field models
+(``field``, static):
+
+- ``"linear"`` (the default): the field to first order in the displacement, the block's
+  exact field plus the integral of the moved and turned particles' dipoles over the layer
+  (:func:`magdesign.fields.layer_field.layer_field`), on ``resolution`` (n_x, n_y, Gauss
+  nodes; static: by :func:`default_resolution`, 2 nodes per ``depth`` across the layer and
+  GAUSS_NODES through it, from the concrete values at construction). The displacement and
+  rotation at the nodes come from the layer's Fourier sums
+  (:func:`magdesign.mechanics.skin_layer.layer_displacement_grid`) cut at the node grid's own
+  wavenumbers (:func:`band_limited_grid`, the reason in the field's module). Its
+  discretisation error is :meth:`SkinScene.field_error`, the change to the finer resolution
+  (:func:`~magdesign.fields.layer_field.finer`); at the default it is about 0.1-0.2 % of
+  the largest change of the field at the chips under a press.
+- ``"cells"``: the layer cut into ``cells`` rigid cuboid cells
+  (:mod:`magdesign.fields.cells`), each moved by the displacement at its centre and turned by
+  the rotation there (:func:`magdesign.fields.cells.carried_cells`), the displacement and
+  rotation from the Fourier sums on the cell grid (about 1e-4 of the peak displacement from
+  the Hankel quadrature's values) on the lattice ``spectral`` (static:
+  :func:`~magdesign.mechanics.skin_layer.spectral_grid` of the size and thickness the scene is
+  built with, unless given). A cell as thick as the layer moves its bonded bottom face with
+  its centre: the field's change converges as the cells thin. Under a centred press, at the
+  centre chip 1 mm below a 2 mm layer of 20 x 20 cells, the change was -246, 28, 114, 137 and
+  143 uT at n_z = 1, 2, 4, 8 and 16 cells through the thickness: the error falls as n_z^-2
+  from n_z = 2 on (21 % at 4, 5 % at 8, 1.4 % at 16), and the outputs converge worse.
 
 An eFlesh-like skin (Pattabiraman et al., "eFlesh: highly customizable magnetic touch
 sensing using cut-cell microstructures", 2025: a printed soft lattice carrying small magnets
@@ -66,6 +78,7 @@ shear, with the chips' noise (``noise``, T per axis):
                            sweep over the chips' range (-)
 """
 
+import math
 from typing import ClassVar
 
 import equinox as eqx
@@ -73,7 +86,9 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
+from magdesign.fields.layer_field import finer, gauss_levels, layer_field
 from magdesign.mechanics.skin_layer import (
     ElasticLayer,
     SpectralGrid,
@@ -94,6 +109,28 @@ CONTACT_FORCE_FLOOR = 1e-3
 BACKGROUND_REFERENCE = 50 * uT
 # The unknowns of a load point and their units, the order of the Jacobian's columns.
 LOAD_UNKNOWNS = ("x", "y", "normal", "shear_x", "shear_y")
+# The uniformly magnetised layer's field models (module docstring).
+FIELD_MODELS = ("linear", "cells")
+# The linear model's default resolution: in-plane nodes at most 1 / NODES_PER_DEPTH of the
+# chips' depth apart, and GAUSS_NODES heights through the thickness (module docstring).
+NODES_PER_DEPTH = 2.0
+GAUSS_NODES = 6
+
+
+def default_resolution(size, depth) -> tuple[int, int, int]:
+    """The linear field's default (n_x, n_y, Gauss nodes) for a layer of sides ``size`` (m,
+    (2,)) over chips ``depth`` (m) below it, from their concrete values (module docstring)."""
+    sides, depth = _concrete(size), _concrete(depth)
+    if sides is None or depth is None:
+        raise ValueError("default_resolution needs the concrete size and depth (not traced values)")
+    n = [max(2, math.ceil(NODES_PER_DEPTH * float(side) / float(depth))) for side in sides]
+    return (n[0], n[1], GAUSS_NODES)
+
+
+def band_limited_grid(periods: tuple[int, int], levels: int) -> SpectralGrid:
+    """The linear field's wavevector lattice: ``periods`` (P_x, P_y) cells, cut at the node
+    grid's own wavenumbers on each of ``levels`` heights (:mod:`magdesign.fields.layer_field`)."""
+    return SpectralGrid(periods=tuple(periods), refine=((1, 1),) * levels)
 
 
 def _chip_pairs(chips) -> tuple[tuple[Float[Array, ""], Float[Array, ""]], ...]:
@@ -118,10 +155,13 @@ class SkinMagnets(eqx.Module):
 class SkinScene(AbstractScene):
     """A magnetic skin over a chip array (module docstring); lengths (m), J0 (T), moduli (Pa).
 
-    ``direction`` (static): the polarization's unit vector; ``cells`` (static): the layer's
-    cells (n_x, n_y, n_z); ``map_grid`` (static): the outputs' contact positions (n_x, n_y);
-    ``spectral`` (static): the cells' wavevector lattice, by default chosen from the concrete
-    size and thickness at construction (module docstring). ``chips``: each chip's (x, y)
+    ``direction`` (static): the polarization's unit vector; ``field`` (static): "linear" or
+    "cells" (module docstring); ``resolution`` (static): the linear field's nodes (n_x, n_y,
+    Gauss nodes), by default :func:`default_resolution`'s; ``cells`` (static): the layer's
+    cells (n_x, n_y, n_z) of the "cells" field; ``map_grid`` (static): the outputs' contact
+    positions (n_x, n_y); ``spectral`` (static): the field's wavevector lattice (the linear
+    field's or the cells'), by default chosen from the concrete size and thickness at
+    construction (module docstring). ``chips``: each chip's (x, y)
     (m), given as an (S, 2) array and kept as pairs of scalars (each a design parameter); in
     units of ``pitch`` (m) where a pitch is given (a grid's unit offsets): the chips then sit
     at ``chips * pitch`` (:meth:`chip_positions`). ``magnets``: discrete magnets in an
@@ -145,10 +185,22 @@ class SkinScene(AbstractScene):
     spectral: SpectralGrid | None = eqx.field(static=True, default=None)
     pitch: Float[Array, ""] | None = None
     magnets: SkinMagnets | None = None
+    field: str = eqx.field(static=True, default="linear")
+    resolution: tuple[int, int, int] | None = eqx.field(static=True, default=None)
 
     def __post_init__(self):
-        # the cells' wavevector lattice, from the layer's values at construction (module docstring)
-        if self.spectral is None:
+        if self.field not in FIELD_MODELS:
+            raise ValueError(f"field must be one of {FIELD_MODELS}, got {self.field!r}")
+        # the wavevector lattice and the linear field's nodes, from the values at construction
+        # (module docstring)
+        linear = self.field == "linear" and self.magnets is None
+        if linear and self.resolution is None:
+            self.resolution = default_resolution(self.size, self.depth)
+        if self.spectral is None and linear:
+            nx, ny, nodes = self.resolution
+            plane = spectral_grid(size=self.size, thickness=self.thickness, cells=(nx, ny, 1))
+            self.spectral = band_limited_grid(plane.periods, nodes)
+        elif self.spectral is None:
             self.spectral = spectral_grid(size=self.size, thickness=self.thickness, cells=self.cells)
 
     SOURCE_KEY: ClassVar = "magnet.polarization"
@@ -210,13 +262,50 @@ class SkinScene(AbstractScene):
         force = jnp.maximum(normal_force, CONTACT_FORCE_FLOOR)
         return (3.0 * force * self.sphere_radius / (4.0 * e_star)) ** (1.0 / 3.0)
 
-    def source_field(self, points, displacement):
-        load = SurfaceLoad(
-            centre=displacement[:2],
-            radius=self.contact_radius(displacement[2]),
-            normal_force=displacement[2],
-            shear_force=displacement[3:5],
+    def surface_load(self, state: Float[Array, "5"]) -> SurfaceLoad:
+        """The sphere's load of a load state (x, y, Fn, F_x, F_y) (m, m, N, N, N)."""
+        return SurfaceLoad(
+            centre=state[:2], radius=self.contact_radius(state[2]), normal_force=state[2], shear_force=state[3:5]
         )
+
+    def linear_field(self, points, load: SurfaceLoad, resolution=None):
+        """The uniformly magnetised layer's field B (T) at ``points`` (m, (..., 3)) under
+        ``load``, first order in the displacement (:func:`magdesign.fields.layer_field.layer_field`),
+        at ``resolution`` (n_x, n_y, Gauss nodes; static): the scene's, or its :func:`finer`
+        one (the lattice's periods, a length, kept)."""
+        resolution = self.resolution if resolution is None else tuple(resolution)
+        factor = resolution[0] // self.resolution[0]
+        grid = self.spectral
+        if resolution != self.resolution:
+            grid = band_limited_grid(tuple(factor * p for p in grid.periods), resolution[2])
+        heights, _ = gauss_levels(resolution[2])
+        u, rotation = layer_displacement_grid(
+            layer=self.layer(), load=load, size=self.size, cells=resolution, grid=grid, levels=tuple(heights)
+        )
+        return layer_field(
+            points,
+            size=self.size,
+            thickness=self.thickness,
+            polarization=self.polarization * jnp.asarray(self.direction),
+            displacement=u,
+            rotation=rotation,
+        )
+
+    def field_error(self, state: Float[Array, "5"]) -> Float[Array, "s 3"]:
+        """The linear field's discretisation error at the chips (T, scene frame), (S, 3),
+        under one load state (x, y, Fn, F_x, F_y): its change from the scene's resolution to
+        the :func:`~magdesign.fields.layer_field.finer` one (module docstring)."""
+        if self.field != "linear" or self.magnets is not None:
+            raise ValueError("field_error: only a uniformly magnetised layer's linear field has an estimate")
+        points, _ = self.sensor_poses()
+        load = self.surface_load(state)
+        coarse = self.linear_field(points, load)
+        return jnp.abs(self.linear_field(points, load, finer(self.resolution)) - coarse)
+
+    def source_field(self, points, displacement):
+        load = self.surface_load(displacement)
+        if self.magnets is None and self.field == "linear":
+            return self.linear_field(points, load)
         if self.magnets is not None:
             # the discrete magnets, each carried by the layer's displacement and rotation at its centre
             dimension = self.magnets.sizes

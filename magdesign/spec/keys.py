@@ -359,9 +359,26 @@ def _keys():
             _NDFEB,
         ),
         Key(
+            "magnet.field",
+            "choice",
+            "the uniformly magnetised skin's field model",
+            default="linear",
+            choices={
+                "linear": "first order in the displacement, integrated over the layer (converged, with an estimate)",
+                "cells": "rigid cuboid cells carried by the displacement (magnet.cells)",
+            },
+        ),
+        Key(
+            "magnet.resolution",
+            "integers",
+            "the linear field's nodes [along x, along y, Gauss nodes through the thickness]",
+            default=D("2 nodes per chip depth across the layer, 6 Gauss nodes through it"),
+            length=3,
+        ),
+        Key(
             "magnet.cells",
             "integers",
-            "the skin's cuboid cells [along x, along y, through the thickness] for its field",
+            'the skin\'s cuboid cells [along x, along y, through the thickness] for magnet.field = "cells"',
             default=[16, 16, 8],
             length=3,
         ),

@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from magdesign.fields.cylinder import FIDELITIES as CYLINDER_FIDELITIES
+from magdesign.fields.layer_field import finer
 from magdesign.fields.soft import SIZE_LENGTHS, size_keywords, soft_body
 from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, time_constant_from_pole
 from magdesign.mechanics.dome import BASES as DOME_BASES
@@ -34,7 +35,7 @@ from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadou
 from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions, rotation
-from magdesign.scene.skin_scene import SkinMagnets, SkinScene
+from magdesign.scene.skin_scene import FIELD_MODELS, SkinMagnets, SkinScene, default_resolution
 from magdesign.scene.solids import Solid, check_apart, solid
 from magdesign.spec.checks import PlausibilityWarning, fields
 from magdesign.spec.keys import KEYS
@@ -682,9 +683,23 @@ def _skin_scene(spec, fidelity):
     poisson_ratio = mechanics.quantity("poisson_ratio", "1")
     mechanics.done()
     magnets = _skin_magnets(magnet, direction, size, thickness)
-    if magnets is not None and magnet.has("cells"):
-        raise SpecError("magnet.cells: a skin with [[magnet.magnets]] has an unmagnetised layer, cut into no cells")
+    for key in ("cells", "field", "resolution"):
+        if magnets is not None and magnet.has(key):
+            raise SpecError(
+                f"magnet.{key}: a skin with [[magnet.magnets]] has an unmagnetised layer (its magnets' own fields)"
+            )
+    field = magnet.choice("field", FIELD_MODELS, default="linear")
     cells = _counts(magnet, "cells", [16, 16, 8], "[along x, along y, through the thickness]")
+    if field == "linear" and magnet.has("cells"):
+        raise SpecError(
+            'magnet.cells: the linear field (magnet.field = "linear", the default) has no cells; set '
+            'magnet.field = "cells" for the rigid cells, or magnet.resolution for the linear field\'s nodes'
+        )
+    given = magnet.has("resolution")
+    resolution = _counts(magnet, "resolution", [40, 40, 6], "[along x, along y, Gauss nodes through the thickness]")
+    if given and field != "linear":
+        raise SpecError('magnet.resolution: only the linear field (magnet.field = "linear") has nodes')
+    resolution = resolution if given else None
     magnet.done()
     indenter = Table(spec, "indenter")
     radius = indenter.quantity("radius", "m")
@@ -708,10 +723,17 @@ def _skin_scene(spec, fidelity):
             f"sensor.depth: chips {depth * 1e3:g} mm below the board's surface would sit in the skin; expected "
             "a depth above 0 mm (the chips' sensing points under the skin's bottom face)"
         )
+    if magnets is None and field == "linear":
+        resolution = resolution or default_resolution(size, depth)
+        label, sources = f"magnet.resolution = {list(resolution)}", math.prod(finer(resolution))
+    elif magnets is None:
+        label, sources = f"magnet.cells = {list(cells)}", math.prod(cells)
+    else:
+        label, sources = "magnet.magnets", magnets.centres.shape[0]
     check_fits(
-        f"{'magnet.cells = ' + str(list(cells)) if magnets is None else 'magnet.magnets'}, {chips.shape[0]} chips",
-        15.0 * (math.prod(cells) if magnets is None else magnets.centres.shape[0]) * chips.shape[0],
-        what="the cells' field at the chips and its derivatives",
+        f"{label}, {chips.shape[0]} chips",
+        15.0 * sources * chips.shape[0],
+        what="the layer's field at the chips and its derivatives",
     )
     effects = _hall_effects(spec, hall)
     # the outputs' noise: the listed noise effect's, else one LSB per axis (scene.noise's default)
@@ -733,6 +755,8 @@ def _skin_scene(spec, fidelity):
         cells=cells,
         map_grid=map_grid,
         magnets=magnets,
+        field=field,
+        resolution=resolution,
     )
 
 

@@ -20,7 +20,7 @@ def grid_skin(pitch="8 mm", cells=(4, 4, 1)):
     spec = example("skin")
     spec["sensor"].pop("chips")
     spec["sensor"].update(grid=[2, 2], pitch=pitch, map_grid=[1, 1])
-    spec["magnet"]["cells"] = list(cells)
+    spec["magnet"].update(field="cells", cells=list(cells))
     return spec
 
 

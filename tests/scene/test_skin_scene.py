@@ -31,6 +31,7 @@ def skin(**changes):
         noise=jnp.full(3, 1 * uT),
         hall=mlx90393(),
         effects=(),
+        field="cells",
         cells=(8, 8, 1),
         map_grid=(2, 2),
     )
@@ -111,3 +112,19 @@ def test_the_bounds_read_the_placed_chips():
     nominal = skin(cells=(4, 4, 2))
     np.testing.assert_allclose(placed.readings_at(state), shallower.readings_at(state), rtol=1e-12, atol=1e-15)
     assert np.max(np.abs(placed.readings_at(state) - nominal.readings_at(state))) > 1e-6
+
+
+@pytest.mark.slow  # compiles the linear field at three resolutions
+def test_the_linear_fields_estimate_is_the_size_of_its_error():
+    # at coarse nodes (2 mm apart, 1 mm above the chips) the change to the finer resolution
+    # against the error from a far finer one (independent of the estimate's own pair)
+    coarse, far = skin(field="linear", resolution=(10, 10, 3)), skin(field="linear", resolution=(40, 40, 10))
+    state = jnp.array([1 * mm, 0.5 * mm, 0.1, 0.02, -0.01])
+    points, _ = coarse.sensor_poses()
+    load = coarse.surface_load(state)
+    error = np.asarray(coarse.linear_field(points, load) - far.linear_field(points, load))
+    estimate = np.asarray(coarse.field_error(state))
+    scale = np.max(np.abs(error))
+    assert scale > 0
+    assert np.all(np.abs(error) <= 1.5 * estimate + 0.05 * scale)
+    assert np.max(estimate) < 3 * scale

@@ -41,7 +41,9 @@ def test_the_example_builds_the_skin_it_states():
     assert isinstance(scene, SkinScene)
     cross = [[0.0, 0.0], [0.01, 0.0], [-0.01, 0.0], [0.0, 0.01], [0.0, -0.01]]
     np.testing.assert_allclose(scene.chips, cross, atol=1e-15)
-    assert scene.cells == (4, 4, 2) and scene.map_grid == (2, 2) and scene.direction == (0.0, 0.0, 1.0)
+    # the linear field at its default resolution: 2 nodes per mm of depth across 30 mm, 6 through
+    assert scene.field == "linear" and scene.resolution == (60, 60, 6)
+    assert scene.map_grid == (2, 2) and scene.direction == (0.0, 0.0, 1.0)
     assert {name: float(value) for name, value in parameters(scene).items()} == pytest.approx(
         {
             "magnet.polarization": 0.02,
@@ -100,7 +102,11 @@ def test_the_indenters_radius_is_a_design_parameter():
         (lambda s: s["sensor"].pop("depth"), "sensor.depth", "missing"),
         (lambda s: s["sensor"].update(map_grid=[2, 0]), "sensor.map_grid", "positive integers"),
         (lambda s: s["sensor"].update(positions=[["0 mm", "0 mm", "0 mm"]]), "sensor.positions", "unknown key"),
-        (lambda s: s["magnet"].update(cells=[4, 4]), "magnet.cells", "3 positive integers"),
+        (lambda s: s["magnet"].update(field="cells", cells=[4, 4]), "magnet.cells", "3 positive integers"),
+        (lambda s: s["magnet"].update(cells=[4, 4, 2]), "magnet.cells", "linear field"),
+        (lambda s: s["magnet"].update(field="charges"), "magnet.field", "'linear', 'cells'"),
+        (lambda s: s["magnet"].update(resolution=[40, 40]), "magnet.resolution", "3 positive integers"),
+        (lambda s: s["magnet"].update(field="cells", resolution=[40, 40, 6]), "magnet.resolution", "linear field"),
         (lambda s: s["magnet"].update(direction=[0, 0, 0]), "magnet.direction", "nonzero"),
         (lambda s: s["magnet"].update(polarization="20 mm"), "magnet.polarization", "in T"),
         (lambda s: s["magnet"].update(remanence="1 T"), "magnet.remanence", "unknown key"),
@@ -168,7 +174,8 @@ saturation_ratio = { upper = 1 }
 @pytest.mark.slow  # compiles the outputs' Jacobians through the layer's transforms, and their derivatives
 def test_a_small_skins_design_solves_from_the_command_line(tmp_path, capsys):
     text = (EXAMPLES / "skin.toml").read_text()
-    text = text.replace("cells = [4, 4, 2]", "cells = [2, 2, 1]").replace("map_grid = [2, 2]", "map_grid = [1, 1]")
+    text = text.replace("direction = [0, 0, 1]", "direction = [0, 0, 1]\nresolution = [20, 20, 4]")
+    text = text.replace("map_grid = [2, 2]", "map_grid = [1, 1]")
     # the resolution scales as 1 / J0 (the readings' Jacobian is linear in it): from the start's value,
     # the target at twice the start's polarization is half the start's resolution
     start = tmp_path / "start.toml"
