@@ -139,9 +139,15 @@ def _draw_bodies(axis, scene, displacement):
                         label="magnets (dotted: off the plane)" if index == 0 else None,
                     )
                 )
-        if u[2] > 0.0:
+        if u[2] > 0.0:  # the indenter at the contact's x (its y projected on y = 0)
             radius = float(scene.sphere_radius)
-            axis.add_patch(Circle((u[0] * MM, (h + radius) * MM), radius * MM, **OUTLINE, label="indenter"))
+            if scene.indenter == "flat":
+                punch = Rectangle(
+                    ((u[0] - radius) * MM, h * MM), 2 * radius * MM, radius * MM, **OUTLINE, label="punch"
+                )
+                axis.add_patch(punch)
+            else:
+                axis.add_patch(Circle((u[0] * MM, (h + radius) * MM), radius * MM, **OUTLINE, label="indenter"))
         chips = np.asarray(scene.sensor_poses()[0])
     else:
         radius, thickness = float(scene.plate_radius), float(scene.plate_thickness)
@@ -161,7 +167,8 @@ def _draw_bodies(axis, scene, displacement):
         top = 2 * centre - tip
         axis.plot([tip[0] * MM, top[0] * MM], [tip[2] * MM, top[2] * MM], color="k", linewidth=3, label="pole")
         chips = np.asarray(scene.sensor_poses()[0])
-    axis.plot(chips[:, 0] * MM, chips[:, 2] * MM, "s", color="C3", markersize=5, label="chips")
+    projected = " (projected on y = 0)" if np.any(chips[:, 1] != 0.0) else ""
+    axis.plot(chips[:, 0] * MM, chips[:, 2] * MM, "s", color="C3", markersize=5, label=f"chips{projected}")
 
 
 def _plane_field(scene, displacement, x, z):

@@ -1,6 +1,6 @@
 """A magnetic skin: a magnetised elastomer layer bonded over an array of 3-axis chips (the
 ReSkin / AnySkin class: Bhirangi et al., "ReSkin: versatile, replaceable, lasting tactile
-skins", 2021), pressed by a rigid sphere.
+skins", 2021), pressed by a rigid sphere or a flat punch.
 
 Scene frame: the board's surface is z = 0; the layer (thickness h, sides L_x x L_y,
 centred on the origin) fills 0 <= z <= h, bonded to the board; the chips' sensing points
@@ -16,7 +16,9 @@ a = (3 Fn R / (4 E*))^(1/3) with Hertz's pressure and a shear traction of the sa
 (:mod:`magdesign.mechanics.skin_layer`; the half-space contact radius holds for a / h up to
 about 0.3 and is 3 % off at 0.5); below the force CONTACT_FORCE_FLOOR the patch keeps that
 force's radius (the displacement, proportional to the forces on a given patch, is then nil
-anyway).
+anyway). A rigid flat punch (``indenter = "flat"``) of radius R presses a patch of its own
+radius, whatever the force, with Boussinesq's pressure Fn / (2 pi R^2 sqrt(1 - r^2 / R^2))
+and a shear traction of that shape (the same reach in R / h as Hertz's patch).
 
 The layer's displacement field (linear elasticity: displacements small against h) moves its
 particles and turns them with the material's rotation curl(u) / 2. Two field models
@@ -111,6 +113,8 @@ BACKGROUND_REFERENCE = 50 * uT
 LOAD_UNKNOWNS = ("x", "y", "normal", "shear_x", "shear_y")
 # The uniformly magnetised layer's field models (module docstring).
 FIELD_MODELS = ("linear", "cells")
+# What presses the skin, and the load profile of each (module docstring).
+INDENTERS = {"sphere": "hertz", "flat": "flat"}
 # The linear model's default resolution: in-plane nodes at most 1 / NODES_PER_DEPTH of the
 # chips' depth apart, and GAUSS_NODES heights through the thickness (module docstring).
 NODES_PER_DEPTH = 2.0
@@ -161,7 +165,8 @@ class SkinScene(AbstractScene):
     cells (n_x, n_y, n_z) of the "cells" field; ``map_grid`` (static): the outputs' contact
     positions (n_x, n_y); ``spectral`` (static): the field's wavevector lattice (the linear
     field's or the cells'), by default chosen from the concrete size and thickness at
-    construction (module docstring). ``chips``: each chip's (x, y)
+    construction (module docstring). ``indenter`` (static): "sphere" or "flat" (a rigid
+    flat punch), of radius ``sphere_radius`` (m). ``chips``: each chip's (x, y)
     (m), given as an (S, 2) array and kept as pairs of scalars (each a design parameter); in
     units of ``pitch`` (m) where a pitch is given (a grid's unit offsets): the chips then sit
     at ``chips * pitch`` (:meth:`chip_positions`). ``magnets``: discrete magnets in an
@@ -187,10 +192,13 @@ class SkinScene(AbstractScene):
     magnets: SkinMagnets | None = None
     field: str = eqx.field(static=True, default="linear")
     resolution: tuple[int, int, int] | None = eqx.field(static=True, default=None)
+    indenter: str = eqx.field(static=True, default="sphere")
 
     def __post_init__(self):
         if self.field not in FIELD_MODELS:
             raise ValueError(f"field must be one of {FIELD_MODELS}, got {self.field!r}")
+        if self.indenter not in INDENTERS:
+            raise ValueError(f"indenter must be one of {tuple(INDENTERS)}, got {self.indenter!r}")
         # the wavevector lattice and the linear field's nodes, from the values at construction
         # (module docstring)
         linear = self.field == "linear" and self.magnets is None
@@ -257,15 +265,22 @@ class SkinScene(AbstractScene):
         )
 
     def contact_radius(self, normal_force: Float[Array, ""]) -> Float[Array, ""]:
-        """Hertz's contact radius a (m) of the sphere under ``normal_force`` (N), floored (module docstring)."""
+        """The contact patch's radius a (m) under ``normal_force`` (N): the sphere's Hertz
+        radius, floored, or the flat punch's own (module docstring)."""
+        if self.indenter == "flat":
+            return jnp.broadcast_to(self.sphere_radius, jnp.shape(normal_force))
         e_star = 2.0 * self.shear_modulus / (1.0 - self.poisson_ratio)
         force = jnp.maximum(normal_force, CONTACT_FORCE_FLOOR)
         return (3.0 * force * self.sphere_radius / (4.0 * e_star)) ** (1.0 / 3.0)
 
     def surface_load(self, state: Float[Array, "5"]) -> SurfaceLoad:
-        """The sphere's load of a load state (x, y, Fn, F_x, F_y) (m, m, N, N, N)."""
+        """The indenter's load of a load state (x, y, Fn, F_x, F_y) (m, m, N, N, N)."""
         return SurfaceLoad(
-            centre=state[:2], radius=self.contact_radius(state[2]), normal_force=state[2], shear_force=state[3:5]
+            centre=state[:2],
+            radius=self.contact_radius(state[2]),
+            normal_force=state[2],
+            shear_force=state[3:5],
+            profile=INDENTERS[self.indenter],
         )
 
     def linear_field(self, points, load: SurfaceLoad, resolution=None):

@@ -594,7 +594,25 @@ def _keys():
         Key("sensor.offset", q, "the GMR's offset along x from the pole's axis", "m", R, plausible=LENGTH),
         Key("sensor.height", q, "the GMR's height above the magnet plate", "m", R, NONNEGATIVE, LENGTH),
         # [indenter]: what presses a skin
-        Key("indenter.radius", q, "the radius of the rigid sphere that presses the skin", "m", R, POSITIVE, LENGTH),
+        Key(
+            "indenter.radius",
+            q,
+            "the radius of the sphere or flat punch that presses the skin",
+            "m",
+            R,
+            POSITIVE,
+            LENGTH,
+        ),
+        Key(
+            "indenter.shape",
+            "choice",
+            "what presses the skin",
+            default="sphere",
+            choices={
+                "sphere": "a rigid sphere: Hertz's contact patch, its radius growing with the force",
+                "flat": "a rigid flat punch: Boussinesq's pressure on a patch of the punch's radius",
+            },
+        ),
         # [geometry]
         Key(
             "geometry.gap",

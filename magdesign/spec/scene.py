@@ -35,7 +35,7 @@ from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadou
 from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions, rotation
-from magdesign.scene.skin_scene import FIELD_MODELS, SkinMagnets, SkinScene, default_resolution
+from magdesign.scene.skin_scene import FIELD_MODELS, INDENTERS, SkinMagnets, SkinScene, default_resolution
 from magdesign.scene.solids import Solid, check_apart, solid
 from magdesign.spec.checks import PlausibilityWarning, fields
 from magdesign.spec.keys import KEYS
@@ -611,18 +611,59 @@ def check_on_skin(keys, points, size):
             )
 
 
-def check_contact_patch(scene, force):
-    """Warn (:class:`~magdesign.spec.checks.PlausibilityWarning`, naming load.normal) where the
-    skin's Hertz contact radius under ``force`` (N) exceeds SKIN_CONTACT_RATIO times its thickness."""
-    radius, thickness = float(scene.contact_radius(force)), float(scene.thickness)
-    if radius > SKIN_CONTACT_RATIO * thickness:
-        warnings.warn(
-            f"load.normal: at {force:g} N the sphere's Hertz contact radius is {radius * 1e3:.3g} mm, "
-            f"{radius / thickness:.2g} times the {thickness * 1e3:g} mm skin; the half-space contact patch holds "
-            f"to about {SKIN_CONTACT_RATIO:g} (a smaller force, a smaller indenter.radius or a stiffer layer)",
-            PlausibilityWarning,
-            stacklevel=2,
+def check_skin_loads(scene, loads):
+    """SpecError naming the [load] key unless ``loads`` press ``scene`` (a skin) on its top
+    face: contacts on the skin, normal forces of 0 or more, the largest above 0 (the outputs
+    are taken at it); a PlausibilityWarning where a contact or a point of the outputs' map
+    lies within one thickness of the skin's side (the layer's mechanics is the unbounded
+    layer's), and :func:`check_contact_patch`'s."""
+    size = np.asarray(scene.size)
+    check_on_skin(("load.contact_x", "load.contact_y"), loads.contact, size)
+    normal = np.asarray(loads.normal)
+    if np.any(normal < 0.0):
+        raise SpecError(
+            f"load.normal: {float(normal.min()):g} N would pull on the skin; an indenter only presses: expected "
+            "forces of 0 N or more"
         )
+    if not normal.max() > 0.0:
+        raise SpecError(
+            "load.normal: the skin's outputs are taken at the sweep's largest normal force, 0 N here, where a "
+            "contact has no position to find; expected a press above 0 N"
+        )
+    thickness = float(scene.thickness)
+    for key, points in (("load.contact", loads.contact), ("sensor.map_grid", scene.map_points())):
+        margin = float(np.min(size / 2 - np.abs(np.asarray(points))))
+        if margin < thickness:
+            warnings.warn(
+                f"{key}: a point lies {margin * 1e3:.3g} mm from the skin's side, within its {thickness * 1e3:g} mm "
+                "thickness; the layer is modelled without sides (its displacement is the unbounded layer's), "
+                "which its free side changes there",
+                PlausibilityWarning,
+                stacklevel=3,
+            )
+    check_contact_patch(scene, float(normal.max()))
+
+
+def check_contact_patch(scene, force):
+    """Warn (:class:`~magdesign.spec.checks.PlausibilityWarning`) where the skin's contact
+    radius under ``force`` (N) exceeds SKIN_CONTACT_RATIO times its thickness: the sphere's
+    Hertz radius (naming load.normal), or the flat punch's own (naming indenter.radius)."""
+    radius, thickness = float(scene.contact_radius(force)), float(scene.thickness)
+    if radius <= SKIN_CONTACT_RATIO * thickness:
+        return
+    reach = f"the half-space contact patch holds to about {SKIN_CONTACT_RATIO:g}"
+    if scene.indenter == "flat":
+        message = (
+            f"indenter.radius: the flat punch's {radius * 1e3:.3g} mm radius is {radius / thickness:.2g} times "
+            f"the {thickness * 1e3:g} mm skin; {reach} (a smaller punch or a thicker skin)"
+        )
+    else:
+        message = (
+            f"load.normal: at {force:g} N the sphere's Hertz contact radius is {radius * 1e3:.3g} mm, "
+            f"{radius / thickness:.2g} times the {thickness * 1e3:g} mm skin; {reach} (a smaller force, a "
+            "smaller indenter.radius or a stiffer layer)"
+        )
+    warnings.warn(message, PlausibilityWarning, stacklevel=2)
 
 
 def _skin_chips(sensor):
@@ -634,8 +675,20 @@ def _skin_chips(sensor):
             f"({'both were' if sensor.has('grid') else 'neither was'} given)"
         )
     if sensor.has("grid"):
-        return np.asarray(grid_positions(_grid(sensor), 1.0))[:, :2], sensor.quantity("pitch", "m"), "sensor.grid"
+        pitch = sensor.quantity("pitch", "m")
+        if not pitch > 0.0:
+            raise SpecError(
+                f"sensor.pitch: a grid at {pitch * 1e3:g} mm pitch puts every chip at one place; expected a pitch "
+                "above 0 mm"
+            )
+        return np.asarray(grid_positions(_grid(sensor), 1.0))[:, :2], pitch, "sensor.grid"
     chips = np.asarray(sensor.points("chips", default=None, plane=True), dtype=float).reshape(-1, 2)
+    for i, j in zip(*np.triu_indices(len(chips), k=1)):
+        if np.array_equal(chips[i], chips[j]):
+            raise SpecError(
+                f"sensor.chips: chips {i} and {j} both sit at {np.round(chips[i] * 1e3, 6).tolist()} mm; expected "
+                "each chip at its own place (two chips at one place read the same field)"
+            )
     return chips, None, "sensor.chips"
 
 
@@ -703,6 +756,7 @@ def _skin_scene(spec, fidelity):
     magnet.done()
     indenter = Table(spec, "indenter")
     radius = indenter.quantity("radius", "m")
+    indenter_shape = indenter.choice("shape", tuple(INDENTERS), default="sphere")
     indenter.done()
     sensor = Table(spec, "sensor")
     sensor.choice("model", ("hall3d",))
@@ -757,6 +811,7 @@ def _skin_scene(spec, fidelity):
         magnets=magnets,
         field=field,
         resolution=resolution,
+        indenter=indenter_shape,
     )
 
 
@@ -812,8 +867,7 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
         raise SpecError(f"indenter: an [indenter] presses a skin (magnet.shape = 'skin'), not a {shape}")
     scene = _SCENES[shape](spec, fidelity)
     if isinstance(scene, SkinScene):
-        check_on_skin(("load.contact_x", "load.contact_y"), loads.contact, np.asarray(scene.size))
-        check_contact_patch(scene, float(loads.max_normal))
+        check_skin_loads(scene, loads)
     check_carried_loads(scene, loads)
     check_field_samples(scene, points)
     # a time derivative (the inductors' EMF) or a lag needs a time series

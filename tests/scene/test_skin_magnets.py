@@ -129,7 +129,7 @@ def test_a_magnets_own_direction_overrides_the_skins():
     "magnets, magnet, key",
     [
         ([{"position": ["0 mm", "0 mm", "5.8 mm"], "size": ["1 mm"] * 3}], {}, "magnet.magnets[0].position"),
-        ([{"position": ["14.8 mm", "0 mm", "3 mm"], "size": ["1 mm"] * 3}], {}, "magnet.magnets[0].position"),
+        ([{"position": ["19.8 mm", "0 mm", "3 mm"], "size": ["1 mm"] * 3}], {}, "magnet.magnets[0].position"),
         ([{"position": ["0 mm", "0 mm", "3 mm"], "size": ["1 mm", "0 mm", "1 mm"]}], {}, "magnet.magnets[0].size"),
         ([{"position": ["0 mm", "0 mm", "3 mm"], "size": ["1 mm"] * 3, "direction": [0, 0, 0]}], {}, "direction"),
         ([{"position": ["0 mm", "0 mm", "3 mm"], "size": ["1 mm"] * 3, "colour": "red"}], {}, "colour"),

@@ -4,6 +4,7 @@ a one-line SpecError naming its key, and a design of a small skin solves from th
 import json
 import warnings
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import magpylib
@@ -116,6 +117,15 @@ def test_the_indenters_radius_is_a_design_parameter():
         (lambda s: s.pop("indenter"), "[indenter]", "missing table"),
         (lambda s: s["indenter"].update(radius="-2 mm"), "indenter.radius", "not physical"),
         (lambda s: s["load"].update(contact_y=["0 mm", "16 mm"]), "load.contact_y", "at most 15 mm"),
+        (lambda s: s["load"].update(normal=["0 N", "-0.2 N"]), "load.normal", "an indenter only presses"),
+        (lambda s: s["load"].update(normal=["0 N", "0 N"]), "load.normal", "expected a press above 0 N"),
+        (lambda s: s["sensor"]["chips"].__setitem__(1, ["0 mm", "0 mm"]), "sensor.chips", "chips 0 and 1 both sit"),
+        (
+            lambda s: (s["sensor"].pop("chips"), s["sensor"].update(grid=[2, 3], pitch="0 mm")),
+            "sensor.pitch",
+            "every chip at one place",
+        ),
+        (lambda s: s["indenter"].update(shape="cone"), "indenter.shape", "sphere"),
         (lambda s: s.update(soft=[]), "soft", "not a skin"),
         (lambda s: s.update(geometry={"gap": "1 mm"}), "[geometry]", "no [geometry] table"),
     ],
@@ -149,6 +159,40 @@ def test_a_contact_patch_wider_than_the_model_holds_warns_naming_the_load():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         scene_from_spec(skin())  # the example's 0.9 mm patch under 0.2 N: no warning
+
+
+def test_a_contact_or_map_point_near_the_side_warns():
+    """The layer's mechanics is the unbounded layer's: within one thickness of the skin's side
+    its free side changes the displacement, and the spec says so."""
+    with pytest.warns(PlausibilityWarning, match=r"^load.contact: a point lies 1 mm from the skin's side"):
+        scene_from_spec(skin(lambda s: s["load"].update(contact_x=["14 mm", "14 mm"])))
+    with pytest.warns(PlausibilityWarning, match=r"^sensor.map_grid: a point lies 0.5 mm from"):
+        scene_from_spec(skin(lambda s: s["sensor"]["chips"].__setitem__(1, ["14.5 mm", "0 mm"])))
+
+
+@pytest.mark.slow
+def test_a_flat_punch_keeps_its_radius_and_shrinks_to_the_spheres_point_load():
+    """A flat punch presses a patch of its own radius at every force; a small punch and a
+    small sphere's patch both load the skin as a point force does, so the chips, 3 mm below
+    the surface, read the same change to about (a / 3 mm)^2, while a 1 mm punch reads another."""
+    punch = scene_from_spec(skin(lambda s: s["indenter"].update(shape="flat", radius="0.05 mm")))
+    assert punch.indenter == "flat"
+    np.testing.assert_allclose(punch.contact_radius(jnp.array([0.01, 0.2, 3.0])), 5e-5, rtol=1e-15)
+    sphere = scene_from_spec(skin(lambda s: s["indenter"].update(radius="1 um")))
+    state = jnp.array([1e-3, 0.5e-3, 0.2, 0.03, -0.02])
+    rest = np.asarray(sphere.readings_at(state.at[2:].set(0.0)))
+    change = {
+        name: np.asarray(scene.readings_at(state)) - rest
+        for name, scene in (
+            ("punch", punch),
+            ("sphere", sphere),
+            ("wide", eqx.tree_at(lambda s: s.sphere_radius, punch, jnp.asarray(1e-3))),
+        )
+    }
+    assert float(sphere.contact_radius(0.2)) < 1e-4  # Hertz's patch under 0.2 N on a 1 um sphere: 73 um
+    scale = np.abs(change["sphere"]).max()
+    np.testing.assert_allclose(change["punch"], change["sphere"], atol=2e-3 * scale)
+    assert np.abs(change["wide"] - change["sphere"]).max() > 2e-2 * scale
 
 
 def test_a_bad_skin_spec_exits_2_naming_the_key(tmp_path, capsys):
