@@ -92,7 +92,10 @@ def jit(fn, name: str, structure: str, *, compiler_options=None, batched=()):
         fn: the function.
         name: a short name for the entry's file ("solve", "outputs").
         structure: a text naming everything else that ``fn``'s trace depends on.
-        compiler_options: XLA options of the compiled program (as ``jax.jit``'s).
+        compiler_options: XLA options of the compiled program (as ``jax.jit``'s), or a
+            function without arguments that returns them, asked only when the program is
+            first traced (a kept executable needs no options); such a function keys the
+            entries by its name, so its answer must depend on nothing but the versions.
         batched: the positions of the arguments whose leading axis is a batch: an entry
             is kept for any length of it (shape polymorphism), where export allows.
 
@@ -114,7 +117,8 @@ def jit(fn, name: str, structure: str, *, compiler_options=None, batched=()):
 
     body.__name__ = body.__qualname__ = getattr(fn, "__name__", "body")  # the compiled program's name
     options = compiler_options or {}
-    return _Program(jax.jit(body, compiler_options=options), f"{name}\n{structure}\n{sorted(options.items())}")
+    named = f"{options.__module__}.{options.__qualname__}()" if callable(options) else sorted(options.items())
+    return _Program(body, options, f"{name}\n{structure}\n{named}")
 
 
 # (folder, program text, error mode, in_tree, avals) -> ((path, entry text), Compiled or None)
@@ -142,8 +146,13 @@ class _Program:
     An executable with host callbacks is never kept. Off where :func:`directory` is, on
     several devices and inside another program's trace."""
 
-    def __init__(self, jitted, program):
-        self._jitted, self._program = jitted, program
+    def __init__(self, body, options, program):
+        self._body, self._options, self._program = body, options, program
+
+    @functools.cached_property
+    def _jitted(self):
+        options = self._options() if callable(self._options) else self._options
+        return jax.jit(self._body, compiler_options=options)
 
     def __getattr__(self, name):  # trace, eval_shape, ... as jax.jit's
         return getattr(self._jitted, name)
