@@ -18,9 +18,9 @@ Prints:
   `simulate` and a 5-point Reissner `sweep` (also 7 other points): the first run's wall
   time and the medians of five second runs' wall and CPU (user + sys) times
   (``--second-run-only``: these rows alone); then where a second Reissner solve goes
-  (imports, spec, solve, estimate, report; within solve and estimate: lowering, loading
-  from the compilation cache and compiling, from JAX's monitoring events, and the rest:
-  tracing and running);
+  (imports, spec, solve, estimate, report; within solve and estimate: loading the kept
+  executables, lowering, loading from the compilation cache and compiling, from JAX's
+  monitoring events, and the rest: tracing and running);
 - where that first call goes, in a new process without the cache: the seconds (wall and
   CPU) of tracing the solver's program, lowering it to StableHLO and compiling it with XLA,
   and the compiled program's size (fusions: XLA compiles each into a kernel of its own);
@@ -136,7 +136,8 @@ print("size", len(re.findall(r"= [^=]* fusion\\(", text)), len(re.findall(r"\\n 
 
 # Where a second `magdesign solve --fidelity reissner` goes, in a new process whose caches a
 # first run filled: each stage's wall and CPU seconds, from timers around the command's
-# steps and JAX's own monitoring events (lowering, loading from the compilation cache,
+# steps and around loading the kept executables (magdesign._export, "executable-load"),
+# and JAX's own monitoring events (lowering, loading from the compilation cache,
 # compiling: wall only); "tracing+run" is the rest of the solve and estimate steps (JAX's
 # tracing events count a nested program's trace again in its caller's).
 SECOND_RUN_STAGES = """
@@ -144,17 +145,19 @@ import contextlib, io, sys, time
 began = time.perf_counter(), time.process_time()
 import jax
 import magdesign.cli as cli
+from magdesign import _export
 imported = time.perf_counter(), time.process_time()
-stages = {}
-def timed(name, fn):
+stages, inner = {}, {}
+def timed(name, fn, into=stages):
     def call(*args, **kwargs):
         start = time.perf_counter(), time.process_time()
         try:
             return fn(*args, **kwargs)
         finally:
-            wall, cpu = stages.get(name, (0.0, 0.0))
-            stages[name] = wall + time.perf_counter() - start[0], cpu + time.process_time() - start[1]
+            wall, cpu = into.get(name, (0.0, 0.0))
+            into[name] = wall + time.perf_counter() - start[0], cpu + time.process_time() - start[1]
     return call
+_export._read_executable = timed("executable-load", _export._read_executable, inner)
 events = {}
 def heard(event, seconds, **kwargs):
     events[event] = events.get(event, 0.0) + seconds
@@ -174,10 +177,12 @@ print("report", done[0] - start[0] - rest[0], done[1] - start[1] - rest[1])
 retrieved = events.get("/jax/compilation_cache/cache_retrieval_time_sec", 0.0)
 lowering = events.get("/jax/core/compile/jaxpr_to_mlir_module_duration", 0.0)
 compiling = events.get("/jax/core/compile/backend_compile_duration", 0.0) - retrieved
+loaded = inner.get("executable-load", (0.0, 0.0))
+print("executable-load", *loaded)
 print("lowering", lowering)
 print("cache-load", retrieved)
 print("compiling", compiling)
-print("tracing+run", stages["solve"][0] + stages["estimate"][0] - lowering - retrieved - compiling)
+print("tracing+run", stages["solve"][0] + stages["estimate"][0] - loaded[0] - lowering - retrieved - compiling)
 """
 
 # The second run of each command, in new processes: the commands that benchmarks/design.py

@@ -5,7 +5,10 @@ still trace and lower a program to find its cache key, which for the design solv
 longer than the solve. Here a program of one structure is exported once (StableHLO, with
 every array argument an argument of the program: the spec's numbers are never constants
 in it), serialized beside the compilation cache and deserialized by later processes; the
-compilation cache then holds the executable of the deserialized program.
+compilation cache then holds the executable of the deserialized program. Beside it each
+compiled executable is kept too, one per concrete shapes of the arguments (see
+:class:`_Program`): a later process loads and calls it with no trace, no lowering and no
+compilation-cache key to hash, and falls back to the exported program where it cannot.
 
 An entry is keyed by a text that names everything the trace depends on besides its
 arguments' shapes and dtypes (the caller's ``structure``: the problem's tree structure,
@@ -30,6 +33,7 @@ import os
 import pickle
 import re
 import tempfile
+import types
 from pathlib import Path
 
 import equinox as eqx
@@ -37,6 +41,7 @@ import jax
 import jax.numpy as jnp
 import jaxlib
 import numpy as np
+from jax.experimental import serialize_executable
 
 import magdesign
 from magdesign import _tracing
@@ -87,12 +92,16 @@ def jit(fn, name: str, structure: str, *, compiler_options=None, batched=()):
         fn: the function.
         name: a short name for the entry's file ("solve", "outputs").
         structure: a text naming everything else that ``fn``'s trace depends on.
-        compiler_options: XLA options of the compiled program (as ``jax.jit``'s).
+        compiler_options: XLA options of the compiled program (as ``jax.jit``'s), or a
+            function without arguments that returns them, asked only when the program is
+            first traced (a kept executable needs no options); such a function keys the
+            entries by its name, so its answer must depend on nothing but the versions.
         batched: the positions of the arguments whose leading axis is a batch: an entry
             is kept for any length of it (shape polymorphism), where export allows.
 
     Returns:
-        The jitted function (``lower`` and ``compile`` as ``jax.jit``'s).
+        The jitted function (``lower`` and ``compile`` as ``jax.jit``'s), whose compiled
+        executables are kept too (:class:`_Program`).
     """
 
     def body(*args):
@@ -107,7 +116,110 @@ def jit(fn, name: str, structure: str, *, compiler_options=None, batched=()):
         return jax.tree.unflatten(out_tree, exported.call(*leaves))
 
     body.__name__ = body.__qualname__ = getattr(fn, "__name__", "body")  # the compiled program's name
-    return jax.jit(body, compiler_options=compiler_options or {})
+    options = compiler_options or {}
+    named = f"{options.__module__}.{options.__qualname__}()" if callable(options) else sorted(options.items())
+    return _Program(body, options, f"{name}\n{structure}\n{named}")
+
+
+# (folder, program text, error mode, in_tree, avals) -> ((path, entry text), Compiled or None)
+_LOADED = _tracing.program_cache({})
+_CACHE_HITS = [0]  # how many programs JAX has read from its compilation cache
+
+
+def _count_cache_hit(event, **kwargs):
+    if event == "/jax/compilation_cache/cache_hits":
+        _CACHE_HITS[0] += 1
+
+
+jax.monitoring.register_event_listener(_count_cache_hit)
+
+
+class _Program:
+    """A ``jax.jit`` function whose compiled executables are kept on disk too, one per
+    structure and concrete shapes of the arguments (a batch's length included), so that
+    a later process calls its program without tracing, lowering or hashing it for the
+    compilation cache. An entry's text (``program``: the name, structure and compiler
+    options, then the error mode, the arguments' tree, shapes, dtypes and weak types, the
+    backend, device kind, XLA_FLAGS and :func:`versions`) keys it as :func:`_kept`'s does;
+    one that is missing, damaged, for another text or fails to load is compiled the
+    usual way (through the exported program and the compilation cache) and kept again.
+    An executable with host callbacks is never kept. Off where :func:`directory` is, on
+    several devices and inside another program's trace."""
+
+    def __init__(self, body, options, program):
+        self._body, self._options, self._program = body, options, program
+
+    @functools.cached_property
+    def _jitted(self):
+        options = self._options() if callable(self._options) else self._options
+        return jax.jit(self._body, compiler_options=options)
+
+    def __getattr__(self, name):  # trace, eval_shape, ... as jax.jit's
+        return getattr(self._jitted, name)
+
+    def __call__(self, *args):
+        place, compiled = self._executable(args)
+        if place is None:
+            return self._jitted(*args)
+        if compiled is None:
+            compiled = self._keep(place, self._jitted.lower(*args).compile)
+        return compiled(*args)
+
+    def lower(self, *args):
+        """``jax.jit``'s ``lower``, or only its ``compile`` where a kept executable answers."""
+        place, compiled = self._executable(args)
+        if compiled is not None:
+            return types.SimpleNamespace(compile=lambda: compiled)
+        lowered = self._jitted.lower(*args)
+        if place is None:
+            return lowered
+        return types.SimpleNamespace(compile=lambda: self._keep(place, lowered.compile))
+
+    def _executable(self, args):
+        """(place, the kept executable or None) for ``args`` (arrays or ShapeDtypeStructs);
+        place None where executables are not kept."""
+        folder = directory()
+        leaves, in_tree = jax.tree.flatten((args, {}))
+        if folder is None or jax.device_count() > 1 or any(isinstance(leaf, jax.core.Tracer) for leaf in leaves):
+            return None, None
+        avals = tuple((tuple(leaf.shape), str(leaf.dtype), bool(getattr(leaf, "weak_type", False))) for leaf in leaves)
+        memo = (folder, self._program, _tracing._errors["as_nan"], in_tree, avals)
+        if memo not in _LOADED:
+            if _ADDRESS.search(self._program) or _ADDRESS.search(str(in_tree)):
+                return None, None  # no stable text
+            device = jax.devices()[0]
+            text = (
+                f"{self._program}\nerrors as NaN: {memo[2]}\n{in_tree}\n{avals}\n"
+                f"{device.client.platform} {device.client.platform_version} {device.device_kind}\n"
+                f"XLA_FLAGS={os.environ.get('XLA_FLAGS', '')}\n{versions()}"
+            )
+            name = self._program.split("\n", 1)[0]
+            path = folder / f"{name}-{hashlib.sha256(text.encode()).hexdigest()[:32]}.executable"
+            if len(_LOADED) >= 64:
+                _LOADED.clear()
+            _LOADED[memo] = (path, text), _read_executable(path, text, in_tree)
+        place, compiled = _LOADED[memo]
+        return (memo, *place), compiled
+
+    def _keep(self, place, compile):
+        """The jax.stages.Compiled that ``compile()`` returns, kept in memory and written
+        to its entry where it was compiled here: an executable that JAX read from its
+        compilation cache serializes without its kernels (its entry would fail when run)."""
+        memo, path, text = place
+        hits = _CACHE_HITS[0]
+        compiled = compile()
+        _LOADED[memo] = (path, text), compiled
+        if _CACHE_HITS[0] != hits:
+            return compiled
+        try:
+            if getattr(compiled._executable._unloaded_executable, "host_callbacks", None):
+                return compiled  # its callbacks are Python objects of this process
+            serialized, _, out_tree = serialize_executable.serialize(compiled)
+            outputs = pickle.dumps(jax.tree.unflatten(out_tree, [0] * out_tree.num_leaves))
+        except Exception:  # an executable that this backend or jax cannot serialize
+            return compiled
+        _keep(path, {"text": text, "executable": serialized, "out_tree": outputs})
+        return compiled
 
 
 def filter_jit(fn, name: str):
@@ -175,6 +287,20 @@ def _kept(fn, name, structure, in_tree, avals):
         path = folder / f"{name}-{hashlib.sha256(text.encode()).hexdigest()[:32]}.jaxexport"
         _KEPT[memo] = _read(path, text) or _export(fn, in_tree, avals, path, text)
     return _KEPT[memo]
+
+
+def _read_executable(path, text, in_tree):
+    """The executable kept at ``path`` for ``text``, loaded for arguments of ``in_tree``,
+    or None where it is missing, unreadable, for another text or fails to load."""
+    try:
+        entry = pickle.loads(path.read_bytes())
+        if entry["text"] != text:
+            return None
+        _lapack_ready()
+        out_tree = jax.tree.structure(pickle.loads(entry["out_tree"]))
+        return serialize_executable.deserialize_and_load(entry["executable"], in_tree, out_tree)
+    except Exception:  # any damage to the file is a miss: the executable is compiled again
+        return None
 
 
 def _read(path, text):

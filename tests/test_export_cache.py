@@ -1,14 +1,20 @@
-"""The exported programs kept on disk (magdesign._export): one entry per structure, the
-spec's numbers arguments of it, damaged or stale entries made again, a switch to turn it off."""
+"""The exported programs and compiled executables kept on disk (magdesign._export): one
+entry per structure, the spec's numbers arguments of it, executables read back by a new
+process, damaged or stale entries made again, a switch to turn it off."""
 
 import copy
 import json
+import os
 import pickle
+import subprocess
+import sys
+import textwrap
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from jax._src import compilation_cache
 
 from magdesign import _export, cli
 from magdesign._tracing import errors_as_nan
@@ -27,6 +33,7 @@ def kept(tmp_path, monkeypatch):
     yield tmp_path / "exported"
     _export.enable(saved)
     _export._KEPT.clear()
+    _export._LOADED.clear()
 
 
 def _new_process():
@@ -34,6 +41,7 @@ def _new_process():
     jax.clear_caches()
     _compiled.cache_clear()
     _export._KEPT.clear()
+    _export._LOADED.clear()
 
 
 def _entries(folder, name):
@@ -97,6 +105,100 @@ def _toy(kept):
     return value, kept / _entries(kept, "toy")[0]
 
 
+# A new process that keeps a program (the eigenvalues of a symmetric matrix, LAPACK's, times
+# a) in the folder argv[1], calls it and prints its answer and how many programs it compiled.
+_NEW_PROCESS = textwrap.dedent(
+    """
+    import json, sys
+    import jax, jax.numpy as jnp, numpy as np
+    jax.config.update("jax_enable_x64", True)
+    from magdesign import _export
+    compiled = []
+    jax.monitoring.register_event_duration_secs_listener(
+        lambda event, seconds, **kwargs: compiled.append(event) if event.endswith("backend_compile_duration") else None
+    )
+    _export.enable(sys.argv[1])
+    program = _export.jit(lambda a, m: a * jnp.linalg.eigvalsh(m), "toy-eig", "a eigvalsh(m)")
+    m = np.array([[2.0, 1.0, 0.0], [1.0, 2.0, 1.0], [0.0, 1.0, 2.0]])
+    batch = program.lower(np.asarray(3.0), jax.ShapeDtypeStruct((3, 3), jnp.float64)).compile()
+    print(json.dumps({"value": program(np.asarray(3.0), m).tolist(), "batch": batch(np.asarray(3.0), m).tolist(),
+                      "compiled": len(compiled)}))
+    """
+)
+
+
+def _run_new_process(folder, **environment):
+    done = subprocess.run(
+        [sys.executable, "-c", _NEW_PROCESS, str(folder)],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, **environment},
+    )
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def test_an_executable_read_from_the_compilation_cache_is_not_kept(kept, tmp_path, fresh_compilation_cache):
+    # such an executable serializes without its kernels: read back, it would fail when run
+    from magdesign._cache import use_compilation_cache
+
+    use_compilation_cache()
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    program = lambda: _export.jit(lambda x: jnp.cumsum(jnp.sin(x)), "toy-cached", "cumsum sin(x)")  # noqa: E731
+    x = np.array([0.5, 1.0])
+    np.testing.assert_allclose(program()(x), np.cumsum(np.sin(x)), rtol=1e-15)  # compiled: kept
+    assert len(list(kept.glob("toy-cached-*.executable"))) == 1
+    for path in kept.glob("toy-cached-*.executable"):
+        path.unlink()
+    _new_process()
+    np.testing.assert_allclose(program()(x), np.cumsum(np.sin(x)), rtol=1e-15)  # read from the cache
+    assert not list(kept.glob("toy-cached-*.executable"))
+
+
+def test_a_new_process_calls_the_kept_executable_without_compiling(tmp_path):
+    # independent: the eigenvalues of tridiag(1, 2, 1) are 2 + 2 cos(k pi / 4), k = 1, 2, 3
+    expected = 3.0 * np.sort(2.0 + 2.0 * np.cos(np.arange(1, 4) * np.pi / 4))
+    first = _run_new_process(tmp_path, MAGDESIGN_NO_EXPORT="")
+    assert first["compiled"] >= 1 and len(list(tmp_path.glob("toy-eig-*.executable"))) == 1
+    second = _run_new_process(tmp_path, MAGDESIGN_NO_EXPORT="")
+    assert second["compiled"] == 0  # read back, its LAPACK call set up without lowering it
+    plain = _run_new_process(tmp_path / "unused", MAGDESIGN_NO_EXPORT="1")
+    assert not (tmp_path / "unused").exists()
+    for answer in (first, second, plain):
+        np.testing.assert_allclose(answer["value"], expected, rtol=1e-12)
+        np.testing.assert_allclose(answer["batch"], expected, rtol=1e-12)
+    np.testing.assert_allclose(second["value"], plain["value"], rtol=1e-12)
+
+
+def _toy_executable(kept):
+    """A kept executable of 2 sin(x), its value and its entry's path."""
+    _new_process()
+    program = _export.jit(lambda x: 2.0 * jnp.sin(x), "toy", "2 sin(x)")
+    value = program(jnp.asarray([0.5, 1.0]))
+    return value, kept / sorted(path.name for path in kept.glob("toy-*.executable"))[0]
+
+
+@pytest.mark.parametrize("damage", ["garbage", "cut short", "other versions", "other structure"])
+def test_a_damaged_or_stale_executable_is_a_miss(kept, damage, fresh_compilation_cache):
+    expected = 2.0 * np.sin([0.5, 1.0])  # independent: numpy
+    _, path = _toy_executable(kept)
+    entry = pickle.loads(path.read_bytes())
+    # the place holds an executable of another program (x times 100) that a reader must not run
+    wrong = jax.jit(lambda x: 100.0 * x).lower(jnp.asarray([0.5, 1.0])).compile()
+    wrong_bytes = jax.experimental.serialize_executable.serialize(wrong)[0]
+    if damage == "garbage":
+        path.write_bytes(b"not an entry")
+    elif damage == "cut short":
+        path.write_bytes(pickle.dumps({**entry, "executable": entry["executable"][: len(entry["executable"]) // 2]}))
+    else:
+        old = _export.versions() if damage == "other versions" else "2 sin(x)"
+        stale = {**entry, "text": entry["text"].replace(old, "jax 0.0.1, format 0"), "executable": wrong_bytes}
+        path.write_bytes(pickle.dumps(stale))
+    value, again = _toy_executable(kept)
+    np.testing.assert_allclose(value, expected, rtol=1e-15)
+    assert again == path and pickle.loads(path.read_bytes())["text"] == entry["text"]  # made again
+
+
 @pytest.mark.parametrize("damage", ["garbage", "other versions", "other structure"])
 def test_a_damaged_or_stale_entry_is_ignored_and_made_again(kept, damage):
     expected = 2.0 * np.sin([0.5, 1.0])  # independent: numpy
@@ -112,6 +214,8 @@ def test_a_damaged_or_stale_entry_is_ignored_and_made_again(kept, damage):
         new = "jax 0.0.1, jaxlib 0.0.1, magdesign 0.0.1 0000, format 0" if damage == "other versions" else "x"
         stale = {**entry, "text": entry["text"].replace(old, new), "exported": bytes(wrong.serialize())}
         path.write_bytes(pickle.dumps(stale))
+    for executable in kept.glob("toy-*.executable"):
+        executable.unlink()  # the exported entry is read where no kept executable answers
     value, again = _toy(kept)
     np.testing.assert_allclose(value, expected, rtol=1e-15)
     assert again == path and pickle.loads(path.read_bytes())["text"] == entry["text"]
@@ -138,6 +242,11 @@ def test_turned_off_by_the_environment(tmp_path, monkeypatch):
         monkeypatch.setenv("MAGDESIGN_NO_EXPORT", "1")
         _export.enable(tmp_path)
         assert _export.directory() is None
+        _new_process()
+        program = _export.jit(lambda x: 2.0 * jnp.sin(x), "toy", "2 sin(x)")
+        np.testing.assert_allclose(program(jnp.asarray([0.5])), 2.0 * np.sin([0.5]), rtol=1e-15)
+        np.testing.assert_allclose(program.lower(jnp.asarray([0.5])).compile()(jnp.asarray([0.5])), 2.0 * np.sin([0.5]))
+        assert list(tmp_path.iterdir()) == []  # neither an exported program nor an executable
         monkeypatch.setenv("MAGDESIGN_NO_EXPORT", "0")
         _export.enable(tmp_path)
         assert _export.directory() == tmp_path
@@ -145,8 +254,24 @@ def test_turned_off_by_the_environment(tmp_path, monkeypatch):
         _export.enable(saved)
 
 
+@pytest.fixture
+def fresh_compilation_cache(tmp_path, monkeypatch):
+    """The command's compilation cache in a fresh folder: an executable is kept only where
+    this process compiled it, not where JAX read it from the tests' shared cache."""
+    monkeypatch.setenv("MAGDESIGN_CACHE_DIR", str(tmp_path / "compiled"))
+    saved = jax.config.jax_compilation_cache_dir, jax.config.jax_persistent_cache_min_compile_time_secs
+    jax.config.update("jax_compilation_cache_dir", str(tmp_path / "compiled"))
+    compilation_cache.reset_cache()
+    yield
+    jax.config.update("jax_compilation_cache_dir", saved[0])
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", saved[1])
+    compilation_cache.reset_cache()
+
+
 @pytest.mark.slow
-def test_the_command_keeps_its_programs_and_answers_the_same_from_them(tmp_path, monkeypatch, capsys):
+def test_the_command_keeps_its_programs_and_answers_the_same_from_them(
+    tmp_path, monkeypatch, capsys, fresh_compilation_cache
+):
     monkeypatch.delenv("MAGDESIGN_NO_EXPORT", raising=False)
     monkeypatch.setattr(cli, "export_directory", lambda directory: tmp_path / "exported")
     answers = []
@@ -155,6 +280,14 @@ def test_the_command_keeps_its_programs_and_answers_the_same_from_them(tmp_path,
         assert cli.main(["solve", "--fidelity", "reissner", "--json", "--quiet"]) == 0
         answers.append(json.loads(capsys.readouterr().out))
     assert _entries(tmp_path / "exported", "solve") and _entries(tmp_path / "exported", "outputs")
+    assert list((tmp_path / "exported").glob("solve-*.executable"))
+    assert list((tmp_path / "exported").glob("outputs-*.executable"))
     assert answers[0]["parameters"] == answers[1]["parameters"]
     assert answers[0]["estimates"] == answers[1]["estimates"]
+    monkeypatch.setenv("MAGDESIGN_NO_EXPORT", "1")  # the un-kept path: traced and compiled as usual
+    _new_process()
+    assert cli.main(["solve", "--fidelity", "reissner", "--json", "--quiet"]) == 0
+    plain = json.loads(capsys.readouterr().out)
+    for name, value in plain["parameters"].items():
+        np.testing.assert_allclose(answers[1]["parameters"][name], value, rtol=1e-12)
     assert _export.directory() is None or _export.directory() != tmp_path / "exported"  # only for the command

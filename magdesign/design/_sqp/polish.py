@@ -4,11 +4,8 @@ active set, and the implicit derivatives of its root."""
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import lineax as lx
-import optimistix as optx
 from jaxtyping import Array, Bool, Float
 
-from magdesign.design._linear import LUOrSVD
 from magdesign.design._sqp.jet import Jet, Settings, _first_jet, _lagrangian_hessian, _scaled_rows, _values
 from magdesign.design._sqp.search import SearchState
 from magdesign.design._sqp.step import _held_rows
@@ -126,6 +123,10 @@ def _implicit_derivatives(equations, z, jet, theta, usable):
     column that is not finite stays NaN in its own batch member (the caller masks it), not
     an error that would stop the batch. ``usable``: False where z or the equations there
     are not finite; the equations are then zero, and so are the derivatives."""
+    import lineax as lx  # here, as in _newton: a run that loads its compiled solver never needs it
+
+    from magdesign.design._linear import LUOrSVD
+
     operator = lx.JacobianLinearOperator(lambda root, _: _linearised(equations, z, jet, usable, root, theta), z)
 
     def column(direction):
@@ -187,7 +188,13 @@ def _newton(settings: Settings):
     on its residual and on its step relative to (1 + |z|) (from the search's point
     typically one or two steps), its linear systems through LU, else an SVD (LUOrSVD: the
     feasibility equations are not square, in general; with more unknowns than equations
-    Newton through an SVD is Gauss-Newton with minimum-norm steps)."""
+    Newton through an SVD is Gauss-Newton with minimum-norm steps). Optimistix and lineax
+    are imported here, when the solver is traced: a run that loads its compiled solver
+    (magdesign._export) never imports them."""
+    import optimistix as optx
+
+    from magdesign.design._linear import LUOrSVD
+
     return optx.Newton(rtol=settings.rtol * 0.1, atol=settings.rtol * 0.1, linear_solver=LUOrSVD())
 
 

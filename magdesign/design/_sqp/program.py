@@ -127,7 +127,7 @@ def _compiled(key, batched):
         jax.vmap(run, in_axes=(None, 0, 0)) if batched else run,
         "solve-batch" if batched else "solve",
         repr(key),
-        compiler_options=compiler_options(),
+        compiler_options=compiler_options,  # probed only where the program is traced
         batched=(1, 2) if batched else (),
     )
 
