@@ -12,7 +12,6 @@ names the paper behind each.
 
 import dataclasses
 import math
-import warnings
 
 import equinox as eqx
 import jax
@@ -20,7 +19,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from magdesign.fields.cylinder import FIDELITIES as CYLINDER_FIDELITIES
-from magdesign.fields.layer_field import finer
 from magdesign.fields.soft import SIZE_LENGTHS, size_keywords, soft_body
 from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, time_constant_from_pole
 from magdesign.mechanics.dome import BASES as DOME_BASES
@@ -35,9 +33,9 @@ from magdesign.scene.magnet_scene import Inductors, MagnetScene, SpinValveReadou
 from magdesign.scene.mechanics import Dome, Layer
 from magdesign.scene.pole_scene import PoleScene
 from magdesign.scene.pose import Magnet, SoftPart, grid_positions, rotation
-from magdesign.scene.skin_scene import FIELD_MODELS, INDENTERS, SkinMagnets, SkinScene, default_resolution
+from magdesign.scene.skin_scene import SkinScene
 from magdesign.scene.solids import Solid, check_apart, solid
-from magdesign.spec.checks import PlausibilityWarning, fields
+from magdesign.spec.checks import fields
 from magdesign.spec.keys import KEYS
 from magdesign.spec.sizes import check_fits
 from magdesign.spec.table import Table, check_tables
@@ -590,231 +588,6 @@ def _pole_scene(spec, fidelity):
     )
 
 
-# The Hertz contact radius over the layer's thickness up to which a skin's half-space contact
-# patch holds to about 3 % (magdesign.scene.skin_scene): beyond it a spec warns.
-SKIN_CONTACT_RATIO = 0.5
-# The Cramer-Rao bound of a contact's (x, y, Fn, F_x, F_y) needs 5 readings or more: two 3-axis chips.
-SKIN_MIN_CHIPS = 2
-
-
-def check_on_skin(keys, points, size):
-    """SpecError naming ``keys[0]`` (x) or ``keys[1]`` (y) unless every point (x, y) (m),
-    shape (n, 2), lies on a skin of sides ``size`` (m) centred on the origin."""
-    points, half = np.asarray(points, dtype=float).reshape(-1, 2), np.asarray(size, dtype=float) / 2
-    for axis, key in enumerate(keys):
-        worst = float(np.max(np.abs(points[:, axis]), initial=0.0))
-        if worst > half[axis] * (1.0 + CONTACT_RTOL):
-            raise SpecError(
-                f"{key}: a {'xy'[axis]} of {worst * 1e3:g} mm from the centre lies off the "
-                f"{size[0] * 1e3:g} x {size[1] * 1e3:g} mm skin (mechanics.size); expected at most "
-                f"{half[axis] * 1e3:g} mm"
-            )
-
-
-def check_skin_loads(scene, loads):
-    """SpecError naming the [load] key unless ``loads`` press ``scene`` (a skin) on its top
-    face: contacts on the skin, normal forces of 0 or more, the largest above 0 (the outputs
-    are taken at it); a PlausibilityWarning where a contact or a point of the outputs' map
-    lies within one thickness of the skin's side (the layer's mechanics is the unbounded
-    layer's), and :func:`check_contact_patch`'s."""
-    size = np.asarray(scene.size)
-    check_on_skin(("load.contact_x", "load.contact_y"), loads.contact, size)
-    normal = np.asarray(loads.normal)
-    if np.any(normal < 0.0):
-        raise SpecError(
-            f"load.normal: {float(normal.min()):g} N would pull on the skin; an indenter only presses: expected "
-            "forces of 0 N or more"
-        )
-    if not normal.max() > 0.0:
-        raise SpecError(
-            "load.normal: the skin's outputs are taken at the sweep's largest normal force, 0 N here, where a "
-            "contact has no position to find; expected a press above 0 N"
-        )
-    thickness = float(scene.thickness)
-    for key, points in (("load.contact", loads.contact), ("sensor.map_grid", scene.map_points())):
-        margin = float(np.min(size / 2 - np.abs(np.asarray(points))))
-        if margin < thickness:
-            warnings.warn(
-                f"{key}: a point lies {margin * 1e3:.3g} mm from the skin's side, within its {thickness * 1e3:g} mm "
-                "thickness; the layer is modelled without sides (its displacement is the unbounded layer's), "
-                "which its free side changes there",
-                PlausibilityWarning,
-                stacklevel=3,
-            )
-    check_contact_patch(scene, float(normal.max()))
-
-
-def check_contact_patch(scene, force):
-    """Warn (:class:`~magdesign.spec.checks.PlausibilityWarning`) where the skin's contact
-    radius under ``force`` (N) exceeds SKIN_CONTACT_RATIO times its thickness: the sphere's
-    Hertz radius (naming load.normal), or the flat punch's own (naming indenter.radius)."""
-    radius, thickness = float(scene.contact_radius(force)), float(scene.thickness)
-    if radius <= SKIN_CONTACT_RATIO * thickness:
-        return
-    reach = f"the half-space contact patch holds to about {SKIN_CONTACT_RATIO:g}"
-    if scene.indenter == "flat":
-        message = (
-            f"indenter.radius: the flat punch's {radius * 1e3:.3g} mm radius is {radius / thickness:.2g} times "
-            f"the {thickness * 1e3:g} mm skin; {reach} (a smaller punch or a thicker skin)"
-        )
-    else:
-        message = (
-            f"load.normal: at {force:g} N the sphere's Hertz contact radius is {radius * 1e3:.3g} mm, "
-            f"{radius / thickness:.2g} times the {thickness * 1e3:g} mm skin; {reach} (a smaller force, a "
-            "smaller indenter.radius or a stiffer layer)"
-        )
-    warnings.warn(message, PlausibilityWarning, stacklevel=2)
-
-
-def _skin_chips(sensor):
-    """(the skin's chips (S, 2) (m), None), or (a grid's unit offsets, its pitch (m): the
-    parameter sensor.pitch, which a design varies), and the key that placed them."""
-    if sensor.has("grid") == sensor.has("chips"):
-        raise SpecError(
-            "sensor.chips: expected the chips' positions [[x, y], ...] or sensor.grid with sensor.pitch "
-            f"({'both were' if sensor.has('grid') else 'neither was'} given)"
-        )
-    if sensor.has("grid"):
-        pitch = sensor.quantity("pitch", "m")
-        if not pitch > 0.0:
-            raise SpecError(
-                f"sensor.pitch: a grid at {pitch * 1e3:g} mm pitch puts every chip at one place; expected a pitch "
-                "above 0 mm"
-            )
-        return np.asarray(grid_positions(_grid(sensor), 1.0))[:, :2], pitch, "sensor.grid"
-    chips = np.asarray(sensor.points("chips", default=None, plane=True), dtype=float).reshape(-1, 2)
-    for i, j in zip(*np.triu_indices(len(chips), k=1)):
-        if np.array_equal(chips[i], chips[j]):
-            raise SpecError(
-                f"sensor.chips: chips {i} and {j} both sit at {np.round(chips[i] * 1e3, 6).tolist()} mm; expected "
-                "each chip at its own place (two chips at one place read the same field)"
-            )
-    return chips, None, "sensor.chips"
-
-
-def _skin_magnets(magnet, direction, size, thickness):
-    """[[magnet.magnets]]: an eFlesh-like skin's discrete magnets (SkinMagnets; None when
-    absent), each inside the layer (else a SpecError naming its position), its direction
-    its own, else magnet.direction, else through the thickness."""
-    raw = magnet._get("magnets", [])
-    if not isinstance(raw, list) or not all(isinstance(item, dict) for item in raw):
-        raise SpecError(f"magnet.magnets: expected [[magnet.magnets]] tables, got {echo(raw)}")
-    rows = []
-    for index, item in enumerate(raw):
-        table = Table({f"magnet.magnets[{index}]": item}, f"magnet.magnets[{index}]")
-        centre, sides = (np.asarray(table.quantities(key, "m", length=3)) for key in ("position", "size"))
-        own = _direction(table)
-        table.done()
-        room = np.array([size[0] / 2, size[1] / 2, thickness / 2])
-        if np.any(np.abs(centre - [0.0, 0.0, thickness / 2]) + sides / 2 > room * (1.0 + CONTACT_RTOL)):
-            raise SpecError(
-                f"{table.name}.position: the magnet at {np.round(centre * 1e3, 6).tolist()} mm reaches out of the "
-                f"{size[0] * 1e3:g} x {size[1] * 1e3:g} x {thickness * 1e3:g} mm layer (0 <= z <= mechanics.thickness)"
-            )
-        rows.append([centre, sides, next(v for v in (own, direction, (0.0, 0.0, 1.0)) if v is not None)])
-    if not rows:
-        return None
-    centres, sizes, directions = (jnp.asarray(np.array(column, dtype=float)) for column in zip(*rows))
-    return SkinMagnets(centres=centres, sizes=sizes, directions=directions)
-
-
-def _skin_scene(spec, fidelity):
-    if fidelity is not None:
-        raise SpecError(f"fidelity: the skin has one mechanics model (a bonded linear layer), got {fidelity!r}")
-    for name in ("geometry", "inductors", "pole"):
-        if name in spec:
-            raise SpecError(f"[{name}]: a skin reads no [{name}] table (its layer lies on the board at z = 0)")
-    magnet = Table(spec, "magnet")
-    magnet.choice("shape", ("skin",))
-    polarization = magnet.quantity("polarization", "T")
-    direction = _direction(magnet)
-    mechanics = Table(spec, "mechanics")
-    mechanics.choice("model", ("bonded_layer",))
-    thickness = mechanics.quantity("thickness", "m")
-    size = mechanics.quantities("size", "m", length=2)
-    shear_modulus = mechanics.quantity("shear_modulus", "Pa")
-    poisson_ratio = mechanics.quantity("poisson_ratio", "1")
-    mechanics.done()
-    magnets = _skin_magnets(magnet, direction, size, thickness)
-    for key in ("cells", "field", "resolution"):
-        if magnets is not None and magnet.has(key):
-            raise SpecError(
-                f"magnet.{key}: a skin with [[magnet.magnets]] has an unmagnetised layer (its magnets' own fields)"
-            )
-    field = magnet.choice("field", FIELD_MODELS, default="linear")
-    cells = _counts(magnet, "cells", [16, 16, 8], "[along x, along y, through the thickness]")
-    if field == "linear" and magnet.has("cells"):
-        raise SpecError(
-            'magnet.cells: the linear field (magnet.field = "linear", the default) has no cells; set '
-            'magnet.field = "cells" for the rigid cells, or magnet.resolution for the linear field\'s nodes'
-        )
-    given = magnet.has("resolution")
-    resolution = _counts(magnet, "resolution", [40, 40, 6], "[along x, along y, Gauss nodes through the thickness]")
-    if given and field != "linear":
-        raise SpecError('magnet.resolution: only the linear field (magnet.field = "linear") has nodes')
-    resolution = resolution if given else None
-    magnet.done()
-    indenter = Table(spec, "indenter")
-    radius = indenter.quantity("radius", "m")
-    indenter_shape = indenter.choice("shape", tuple(INDENTERS), default="sphere")
-    indenter.done()
-    sensor = Table(spec, "sensor")
-    sensor.choice("model", ("hall3d",))
-    hall = _hall(sensor)
-    offsets, pitch, chips_key = _skin_chips(sensor)
-    chips = offsets if pitch is None else offsets * pitch
-    depth = sensor.quantity("depth", "m")
-    map_grid = _counts(sensor, "map_grid", [5, 5], "[along x, along y]")
-    sensor.done()
-    if chips.shape[0] < SKIN_MIN_CHIPS:
-        raise SpecError(
-            f"{chips_key}: {chips.shape[0]} chip(s) read 3 numbers each, too few for a contact's position and "
-            f"3 forces (5 unknowns); expected at least {SKIN_MIN_CHIPS} chips"
-        )
-    check_on_skin((chips_key, chips_key), chips, size)
-    if not depth > 0.0:
-        raise SpecError(
-            f"sensor.depth: chips {depth * 1e3:g} mm below the board's surface would sit in the skin; expected "
-            "a depth above 0 mm (the chips' sensing points under the skin's bottom face)"
-        )
-    if magnets is None and field == "linear":
-        resolution = resolution or default_resolution(size, depth)
-        label, sources = f"magnet.resolution = {list(resolution)}", math.prod(finer(resolution))
-    elif magnets is None:
-        label, sources = f"magnet.cells = {list(cells)}", math.prod(cells)
-    else:
-        label, sources = "magnet.magnets", magnets.centres.shape[0]
-    check_fits(
-        f"{label}, {chips.shape[0]} chips",
-        15.0 * sources * chips.shape[0],
-        what="the layer's field at the chips and its derivatives",
-    )
-    effects = _hall_effects(spec, hall)
-    # the outputs' noise: the listed noise effect's, else one LSB per axis (scene.noise's default)
-    noise = next((effect.sigma for effect in effects if effect.name == "noise"), hall.lsb)
-    return SkinScene(
-        thickness=jnp.asarray(thickness),
-        size=jnp.asarray(size),
-        polarization=jnp.asarray(polarization),
-        shear_modulus=jnp.asarray(shear_modulus),
-        poisson_ratio=jnp.asarray(poisson_ratio),
-        sphere_radius=jnp.asarray(radius),
-        chips=jnp.asarray(offsets),
-        pitch=None if pitch is None else jnp.asarray(pitch),
-        depth=jnp.asarray(depth),
-        noise=jnp.broadcast_to(jnp.asarray(noise, dtype=float), (3,)),
-        hall=hall,
-        effects=effects,
-        direction=(0.0, 0.0, 1.0) if direction is None else tuple(float(v) for v in direction),
-        cells=cells,
-        map_grid=map_grid,
-        magnets=magnets,
-        field=field,
-        resolution=resolution,
-        indenter=indenter_shape,
-    )
-
-
 def check_carried_loads(scene, loads):
     """SpecError naming the [load] key of a shear force that ``scene``'s mechanics does not
     carry: a dome's model takes the normal load only (a shear would be dropped, the magnet
@@ -846,6 +619,12 @@ def check_field_samples(scene, points):
     )
 
 
+def _skin_scene(spec, fidelity):
+    from magdesign.spec.skin import skin_scene  # spec.skin builds on this module's tables
+
+    return skin_scene(spec, fidelity)
+
+
 _SCENES = {"cylinder": _cylinder_scene, "film": _film_scene, "plate": _pole_scene, "skin": _skin_scene}
 
 
@@ -867,6 +646,8 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
         raise SpecError(f"indenter: an [indenter] presses a skin (magnet.shape = 'skin'), not a {shape}")
     scene = _SCENES[shape](spec, fidelity)
     if isinstance(scene, SkinScene):
+        from magdesign.spec.skin import check_skin_loads
+
         check_skin_loads(scene, loads)
     check_carried_loads(scene, loads)
     check_field_samples(scene, points)
