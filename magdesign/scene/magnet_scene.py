@@ -56,7 +56,7 @@ from jaxtyping import Array, Float
 from magdesign.scene.core import MECHANICS_CONVERGED, AbstractScene
 from magdesign.scene.effects import AbstractEffect, effect_output_units, effect_outputs, judged_saturation
 from magdesign.scene.mechanics import AbstractMechanics
-from magdesign.scene.pose import Magnet, SoftPart, posed_cylinder, rotation, soft_parts_field
+from magdesign.scene.pose import Magnet, SoftPart, posed_cylinder, rotation, soft_parameter_paths, soft_parts_field
 from magdesign.transducers import Hall3D, SpinValve, add_noise, emf, slip_flags
 
 
@@ -152,15 +152,7 @@ class MagnetScene(AbstractScene):
         }
         for name, get in self.mechanics.parameter_paths.items():
             paths[name] = lambda s, get=get: get(s.mechanics)
-        for i, part in enumerate(self.soft):
-            paths[f"soft[{i}].permeability"] = lambda s, i=i: s.soft[i].permeability
-            if part.saturation is not None:
-                paths[f"soft[{i}].saturation"] = lambda s, i=i: s.soft[i].saturation
-            for k in range(3):
-                paths[f"soft[{i}].position[{k}]"] = lambda s, i=i, k=k: s.soft[i].centre[k]
-            for k in range(len(part.size)):
-                paths[f"soft[{i}].size[{k}]"] = lambda s, i=i, k=k: s.soft[i].size[k]
-        return paths
+        return paths | soft_parameter_paths(self.soft, lambda s: s.soft)
 
     @property
     def reading_labels(self):

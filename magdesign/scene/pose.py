@@ -97,6 +97,22 @@ class SoftPart(eqx.Module):
         return centre + displacement if self.moves else centre
 
 
+def soft_parameter_paths(parts, get_parts) -> dict:
+    """The design parameters of the soft ``parts`` by spec key (``soft[i].permeability``,
+    ``.saturation`` where given, ``.position[k]``, ``.size[k]``), each a getter of the scene;
+    ``get_parts`` gets the parts from the scene."""
+    paths = {}
+    for i, part in enumerate(parts):
+        paths[f"soft[{i}].permeability"] = lambda s, i=i: get_parts(s)[i].permeability
+        if part.saturation is not None:
+            paths[f"soft[{i}].saturation"] = lambda s, i=i: get_parts(s)[i].saturation
+        for k in range(3):
+            paths[f"soft[{i}].position[{k}]"] = lambda s, i=i, k=k: get_parts(s)[i].centre[k]
+        for k in range(len(part.size)):
+            paths[f"soft[{i}].size[{k}]"] = lambda s, i=i, k=k: get_parts(s)[i].size[k]
+    return paths
+
+
 def soft_parts_frames(parts, displacement, magnets):
     """Each part's body, centre (3,) (m, scene frame), rotation (3, 3) (v_body = matrix
     v_scene) and the permanent magnets' B (T) at its cells in its own frame, (N_b, 3);

@@ -102,6 +102,7 @@ from magdesign.mechanics.skin_layer import (
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect, judged_saturation
 from magdesign.scene.loads import Loads
+from magdesign.scene.pose import SoftPart, soft_parameter_paths, soft_parts_field
 from magdesign.transducers import Hall3D, cramer_rao
 from magdesign.units import uT
 
@@ -171,6 +172,8 @@ class SkinScene(AbstractScene):
     units of ``pitch`` (m) where a pitch is given (a grid's unit offsets): the chips then sit
     at ``chips * pitch`` (:meth:`chip_positions`). ``magnets``: discrete magnets in an
     unmagnetised layer (an eFlesh-like skin), or None for a uniformly magnetised layer.
+    ``soft``: fixed soft-magnetic parts near the skin (nearby iron, ``[[soft]]``), magnetised
+    by the skin's field under each load (:func:`~magdesign.scene.pose.soft_parts_field`).
     """
 
     thickness: Float[Array, ""]
@@ -193,6 +196,7 @@ class SkinScene(AbstractScene):
     field: str = eqx.field(static=True, default="linear")
     resolution: tuple[int, int, int] | None = eqx.field(static=True, default=None)
     indenter: str = eqx.field(static=True, default="sphere")
+    soft: tuple[SoftPart, ...] = ()
 
     def __post_init__(self):
         if self.field not in FIELD_MODELS:
@@ -239,7 +243,7 @@ class SkinScene(AbstractScene):
             for i in range(len(self.chips)):
                 for k in range(2):
                     paths[f"sensor.chips[{i}][{k}]"] = lambda s, i=i, k=k: s.chips[i][k]
-        return paths
+        return paths | soft_parameter_paths(self.soft, lambda s: s.soft)
 
     def chip_range(self):
         """The listed saturation effect, else the Hall chips' own range per axis."""
@@ -318,6 +322,17 @@ class SkinScene(AbstractScene):
         return jnp.abs(self.linear_field(points, load, finer(self.resolution)) - coarse)
 
     def source_field(self, points, displacement):
+        field = self.skin_field(points, displacement)
+        if self.soft:
+            # fixed parts (nearby iron), magnetised by the skin's field under the same load
+            field = field + soft_parts_field(
+                self.soft, points, jnp.zeros(3), lambda x: self.skin_field(x, displacement)
+            )
+        return field
+
+    def skin_field(self, points, displacement):
+        """The skin's own flux density (T, scene frame) at ``points`` (m, (..., 3)) under the
+        load state ``displacement`` (x, y, Fn, F_x, F_y): the layer's or its magnets'."""
         load = self.surface_load(displacement)
         if self.magnets is None and self.field == "linear":
             return self.linear_field(points, load)

@@ -638,9 +638,10 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
     loads = loads_from_spec(spec)  # a bad [load] table is a bad spec, whatever runs next
     points = loads.normal.shape[0]
     shape = Table(spec, "magnet").choice("shape", tuple(_SCENES))
-    if "soft" in spec and shape != "cylinder":
+    if "soft" in spec and shape not in ("cylinder", "skin"):
         raise SpecError(
-            f"soft: [[soft]] parts are magnetised by cylinder magnets (magnet.shape = 'cylinder'), not a {shape}"
+            "soft: [[soft]] parts are magnetised by cylinder magnets (magnet.shape = 'cylinder') or a skin, "
+            f"not a {shape}"
         )
     if "indenter" in spec and shape != "skin":
         raise SpecError(f"indenter: an [indenter] presses a skin (magnet.shape = 'skin'), not a {shape}")

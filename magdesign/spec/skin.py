@@ -11,8 +11,18 @@ import numpy as np
 from magdesign.fields.layer_field import finer
 from magdesign.scene.pose import grid_positions
 from magdesign.scene.skin_scene import FIELD_MODELS, INDENTERS, SkinMagnets, SkinScene, default_resolution
+from magdesign.scene.solids import check_apart, solid
 from magdesign.spec.checks import PlausibilityWarning
-from magdesign.spec.scene import CONTACT_RTOL, _counts, _direction, _grid, _hall, _hall_effects
+from magdesign.spec.scene import (
+    CONTACT_RTOL,
+    _counts,
+    _direction,
+    _grid,
+    _hall,
+    _hall_effects,
+    _soft_parts,
+    _soft_solid,
+)
 from magdesign.spec.sizes import check_fits
 from magdesign.spec.table import Table
 from magdesign.units import SpecError, echo
@@ -145,6 +155,21 @@ def _skin_magnets(magnet, direction, size, thickness):
     return SkinMagnets(centres=centres, sizes=sizes, directions=directions)
 
 
+def _skin_soft_parts(spec, size, thickness, chips, depth):
+    """[[soft]] parts near a skin: fixed (the load moves the layer only), apart from the
+    layer and from the chips' sensing points; SpecError naming the part otherwise."""
+    parts = _soft_parts(spec)
+    for i, part in enumerate(parts):
+        if part.moves:
+            raise SpecError(
+                f"soft[{i}].moves: a skin's load moves its layer, not the parts near it; expected moves = false"
+            )
+    layer = solid("the skin's layer", "cuboid", [0.0, 0.0, thickness / 2], [size[0] / 2, size[1] / 2, thickness / 2])
+    points = np.concatenate([chips, np.full((len(chips), 1), -depth)], axis=-1)
+    check_apart([("sensor.chips", points)], [layer] + [_soft_solid(f"soft[{i}]", p) for i, p in enumerate(parts)])
+    return parts
+
+
 def skin_scene(spec, fidelity):
     """The :class:`~magdesign.scene.skin_scene.SkinScene` of a spec (magnet.shape = "skin"),
     or a SpecError naming the key."""
@@ -218,6 +243,7 @@ def skin_scene(spec, fidelity):
         15.0 * sources * chips.shape[0],
         what="the layer's field at the chips and its derivatives",
     )
+    soft = _skin_soft_parts(spec, size, thickness, chips, depth)
     effects = _hall_effects(spec, hall)
     # the outputs' noise: the listed noise effect's, else one LSB per axis (scene.noise's default)
     noise = next((effect.sigma for effect in effects if effect.name == "noise"), hall.lsb)
@@ -241,4 +267,5 @@ def skin_scene(spec, fidelity):
         field=field,
         resolution=resolution,
         indenter=indenter_shape,
+        soft=soft,
     )

@@ -126,7 +126,6 @@ def test_the_indenters_radius_is_a_design_parameter():
             "every chip at one place",
         ),
         (lambda s: s["indenter"].update(shape="cone"), "indenter.shape", "sphere"),
-        (lambda s: s.update(soft=[]), "soft", "not a skin"),
         (lambda s: s.update(geometry={"gap": "1 mm"}), "[geometry]", "no [geometry] table"),
     ],
 )
@@ -293,3 +292,30 @@ def test_an_incompressible_layer_is_a_skins_and_not_a_linear_materials():
     film["mechanics"]["poisson_ratio"] = 0.5
     with pytest.raises(SpecError, match=r"mechanics\.poisson_ratio: 0\.5 makes a linear material incompressible"):
         scene_from_spec(film)
+
+
+@pytest.mark.slow
+def test_iron_near_a_skin_is_magnetised_by_its_field():
+    """A small soft sphere (mu_r 2, 0.5 mm radius) 5 mm below the board: magnetised by the
+    layer's field at its centre (magpylib's block), it is the dipole m = 4 pi a^3 chi / (chi
+    + 3) B0 / mu0 (a sphere in a uniform field), whose field the chips add to the layer's, to
+    the field's variation over the sphere and the staircase sphere's error (0.5 % seen)."""
+
+    def with_iron(spec):
+        spec["scene"] = {}
+        spec["soft"] = [{"shape": "sphere", "size": "1 mm", "position": ["3 mm", "2 mm", "-5 mm"], "permeability": 2}]
+
+    scene = scene_from_spec(skin(with_iron))
+    assert "soft[0].permeability" in parameters(scene)
+    alone = scene_from_spec(skin(lambda s: s.update(scene={})))
+    added = np.asarray(scene.readings_at(jnp.zeros(5))) - np.asarray(alone.readings_at(jnp.zeros(5)))
+    centre, radius, chi, mu0 = np.array([3e-3, 2e-3, -5e-3]), 0.5e-3, 1.0, 4e-7 * np.pi
+    block = magpylib.magnet.Cuboid(polarization=(0, 0, 0.02), dimension=(0.03, 0.03, 0.002), position=(0, 0, 0.001))
+    moment = 4 * np.pi * radius**3 * chi / (chi + 3) * block.getB(centre) / mu0
+    chips = np.concatenate([np.asarray(scene.chip_positions()), np.full((5, 1), -1e-3)], axis=-1)
+    dipole = magpylib.misc.Dipole(moment=moment, position=centre).getB(chips)
+    np.testing.assert_allclose(added, dipole, atol=2e-2 * np.abs(dipole).max())
+    with pytest.raises(SpecError, match=r"^soft\[0\]\.moves: a skin's load moves its layer"):
+        scene_from_spec(skin(lambda s: (with_iron(s), s["soft"][0].update(moves=True))))
+    with pytest.raises(SpecError, match=r"^soft\[0\]: it overlaps the skin's layer"):
+        scene_from_spec(skin(lambda s: (with_iron(s), s["soft"][0].update(position=["3 mm", "2 mm", "1 mm"]))))
