@@ -241,8 +241,7 @@ def spreads(tp, scene, loads, nominal: dict) -> dict:
     ``scene``'s outputs under the tolerances of ``tp``, the parts by group of variates
     ("magnet.polarization", "placement.x": every chip's x, ...) in quadrature: forward
     differences of STEP unit sigmas along each variate (magdesign.design.tolerance.perturb),
-    through the one compiled outputs (the library's forward-mode spreads compile the
-    outputs' derivatives: minutes)."""
+    through the one compiled outputs, which every cell of the sweep shares."""
     labels, unit_std = tp.labels, np.asarray(tp.unit_std)
     squares = {name: {} for name in OUTPUTS}
     for i, label in enumerate(labels):
@@ -348,10 +347,15 @@ def main(argv=None):
         f"Hertz's contact radius of the {SPHERE / mm:g} mm sphere at 0.1 N is {contact_radius / mm:.3g} mm, "
         f"a / h = {contact_radius / THICKNESS:.2g}: within the half-space patch's reach (about 0.5). "
         f"At rest the largest chip reading is {rest_ratio:.3g} of the chip's range: the skin's own field at the chips "
-        f"and the Earth's. A press moves it little: over chip {sat_chip} (0: the middle "
-        f"one), where it moves most, linear extrapolation from 0.1 N reaches the range at about {f_sat:.2g} N, far past "
-        "the Hertz patch's and the linear layer's reach and any force the skin bears: no load within the model's reach saturates a chip; the "
-        "skin's field at rest does, once J0 passes about "
+        f"and the Earth's. "
+        + (
+            f"A press moves it little: over chip {sat_chip} (0: the middle one), where it moves most, linear "
+            f"extrapolation from 0.1 N reaches the range at about {f_sat:.2g} N, far past the Hertz patch's and the "
+            "linear layer's reach and any force the skin bears"
+            if np.isfinite(f_sat)
+            else "A press lowers it: pressed with 0.1 N over each chip in turn, no chip's largest reading grows"
+        )
+        + ": no load within the model's reach saturates a chip; the skin's field at rest does, once J0 passes about "
         f"{j0_saturating / mT:.3g} mT (J0 / {rest_ratio:.3g}, the Earth's 50 uT aside), where the normal-force bound "
         f"would be {base['force_resolution_normal'] * POLARIZATION / j0_saturating / mN:.3g} mN."
     )
@@ -362,9 +366,16 @@ def main(argv=None):
         "The chips in the board's cross at each pitch, the skin at each thickness, pressed with 0.1 N; '+-' is the "
         f"first-order standard deviation under the tolerances (J0 {POLARIZATION_TOLERANCE}, each chip's placement "
         f"{PLACEMENT_TOLERANCE} per axis), by forward differences along each variate "
-        f"({'at the corners of the sweep only in quick mode' if quick else 'at every cell'})."
+        f"(at the sweep's cells {', '.join(f'({p / mm:g}, {h / mm:g}) mm' for p, h in SPREAD_CELLS[quick])})."
     )
     report.table(SWEEP_HEADERS, [sweep_cells(row) for row in rows])
+    near = [row for row in rows if SKIN_SIDE / 2 - row["pitch"] < row["thickness"]]
+    if near:
+        cells = ", ".join(f"({row['pitch'] / mm:g}, {row['thickness'] / mm:g})" for row in near)
+        report.text(
+            f"At (pitch, thickness) = {cells} mm the map's corners lie within a thickness of the {SKIN_SIDE / mm:g} mm "
+            "skin's side, where the unbounded layer's mechanics leaves its reach (docs/skins.md): those rows are rough."
+        )
     best = min(rows, key=lambda row: row["force_resolution_normal"])
     report.text(
         f"The finest normal-force bound of the sweep is {best['force_resolution_normal'] / mN:.3g} mN at a pitch of "
