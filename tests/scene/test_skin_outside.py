@@ -11,6 +11,7 @@ import pytest
 from scene_helpers import example
 
 from magdesign.scene import scene_from_spec, with_parameters
+from magdesign.units import SpecError
 
 CHIPS_MM = [[3.0, 2.0], [15.0, 0.0], [-7.0, 9.0], [5.0, -12.0]]  # off-centre, one on the layer's edge
 CROSS_MM = [[0.0, 0.0], [6.0, 0.0], [-6.0, 0.0], [0.0, 6.0], [0.0, -6.0]]
@@ -58,3 +59,12 @@ def test_a_press_is_linear_in_j0_and_a_reversed_shear_mirrors_the_readings():
     # the mirror x -> -x maps the +x shear onto the -x one: chips at +-6 mm swap, Bx changes sign
     mirrored = backward[[0, 2, 1, 3, 4]] * np.array([-1.0, 1.0, 1.0])
     np.testing.assert_allclose(mirrored, forward, rtol=1e-9, atol=1e-12)
+
+
+def test_a_chip_on_the_layers_edge_is_on_the_skin_and_one_past_it_is_not():
+    """The outside array's chip at x = 15 mm sits on the 30 mm layer's edge: accepted, placed
+    where written; 0.5 mm further it lies off the skin, an error naming sensor.chips."""
+    scene = outside_skin((1.0, 0.0, 0.0), CHIPS_MM)
+    np.testing.assert_allclose(np.asarray(scene.chip_positions()), np.asarray(CHIPS_MM) * 1e-3, atol=1e-15)
+    with pytest.raises(SpecError, match=r"^sensor.chips: a x of 15.5 mm from the centre lies off the 30 x 24 mm skin"):
+        outside_skin((1.0, 0.0, 0.0), [*CHIPS_MM[:1], [15.5, 0.0], *CHIPS_MM[2:]])
