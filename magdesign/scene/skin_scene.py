@@ -16,7 +16,7 @@ a = (3 Fn R / (4 E*))^(1/3) with Hertz's pressure and a shear traction of the sa
 (:mod:`magdesign.mechanics.skin_layer`; the half-space contact radius holds for a / h up to
 about 0.3 and is 3 % off at 0.5); below the force CONTACT_FORCE_FLOOR the patch keeps that
 force's radius (the displacement, proportional to the forces on a given patch, is then nil
-anyway). A rigid flat punch (``indenter = "flat"``) of radius R presses a patch of its own
+anyway). A rigid flat punch (``indenter="flat"``, the spec's ``indenter.shape``) of radius R presses a patch of its own
 radius, whatever the force, with Boussinesq's pressure Fn / (2 pi R^2 sqrt(1 - r^2 / R^2))
 and a shear traction of that shape (the same reach in R / h as Hertz's patch).
 
@@ -42,10 +42,11 @@ particles and turns them with the material's rotation curl(u) / 2. Two field mod
   the Hankel quadrature's values) on the lattice ``spectral`` (static:
   :func:`~magdesign.mechanics.skin_layer.spectral_grid` of the size and thickness the scene is
   built with, unless given). A cell as thick as the layer moves its bonded bottom face with
-  its centre: the field's change converges as the cells thin. Under a centred press, at the
-  centre chip 1 mm below a 2 mm layer of 20 x 20 cells, the change was -246, 28, 114, 137 and
-  143 uT at n_z = 1, 2, 4, 8 and 16 cells through the thickness: the error falls as n_z^-2
-  from n_z = 2 on (21 % at 4, 5 % at 8, 1.4 % at 16), and the outputs converge worse.
+  its centre, and a cell wider than the contact patch spreads the press over its width: the
+  field's change converges as the cells thin (as n_z^-2) and shrink below the patch. Under
+  the example's centred 0.2 N press (a 2 mm layer, the centre chip 1 mm below) the centre
+  chip's Bz changes by -0.8, -108 and -85 uT at 4 x 4 x 2, 16 x 16 x 8 and 20 x 20 x 16
+  cells, where the linear field gives -7.09 uT (docs/skins.md); the outputs converge worse.
 
 An eFlesh-like skin (Pattabiraman et al., "eFlesh: highly customizable magnetic touch
 sensing using cut-cell microstructures", 2025: a printed soft lattice carrying small magnets

@@ -456,7 +456,7 @@ def _keys():
                 "dome": "a hemispherical elastomer dome pressed by a flat plate",
                 "layer": "a uniform elastomer layer",
                 "tilt": "a ball on a torsion spring (the pole scene)",
-                "bonded_layer": "a linear elastic layer bonded to a rigid board, pressed by a sphere (a skin)",
+                "bonded_layer": "a linear elastic layer bonded to a rigid board, pressed by a sphere or a flat punch (a skin)",
             },
         ),
         Key("mechanics.outer_radius", q, "the dome's outer radius", "m", R, POSITIVE, LENGTH),
