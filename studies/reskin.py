@@ -35,9 +35,9 @@ from _report import Report, arguments, progress
 
 from magdesign.design import solve
 from magdesign.design.tolerance import perturb
-from magdesign.mechanics.skin_layer import SpectralGrid, spectral_grid
+from magdesign.mechanics.skin_layer import SpectralGrid
 from magdesign.scene import loads_from_spec, outputs, with_parameters
-from magdesign.scene.skin_scene import band_limited_grid
+from magdesign.scene.skin_scene import linear_grid
 from magdesign.spec.design import problem_from_spec
 from magdesign.spec.tolerance import tolerance_problem_from_spec
 from magdesign.units import mm, mT
@@ -97,7 +97,7 @@ THICKNESSES = {True: (2 * mm, 3 * mm), False: (1.5 * mm, 2 * mm, 2.5 * mm, 3 * m
 # (docs/skins.md), and the field's lattice periods (the sweep's thickest layer's) leave them
 # as they are; half as many nodes across move the field's change by about 1 % and the
 # worst-case bounds, which hang on the smallest signals, by 10 %.
-RESOLUTION = {True: (40, 40, 6), False: (40, 40, 6)}
+RESOLUTION = (40, 40, 6)
 MAP_GRID = {True: (2, 2), False: (5, 5)}
 SAMPLES = {True: 8, False: 40}
 # The sweep's cells whose spreads are computed (17 evaluations each): two corners in quick
@@ -146,7 +146,7 @@ def skin_spec(chips, *, quick: bool, normal: float = DETECTED_FORCE, contact=(0.
             "shape": "skin",
             "polarization": f"{POLARIZATION} T",
             "direction": [0, 0, 1],
-            "resolution": list(RESOLUTION[quick]),
+            "resolution": list(RESOLUTION),
         },
         "mechanics": {
             "model": "bonded_layer",
@@ -206,9 +206,7 @@ def shared_grid(scene, thicknesses) -> SpectralGrid:
     """One wavevector lattice for every thickness swept: the thickest layer's periods (the
     most padding), cut at the nodes' own wavenumbers as at every thickness, so that a single
     compiled scene structure serves the whole sweep."""
-    nx, ny, nodes = scene.resolution
-    thick = spectral_grid(size=scene.size, thickness=max(thicknesses), cells=(nx, ny, 1))
-    return band_limited_grid(thick.periods, nodes)
+    return linear_grid(scene.size, max(thicknesses), scene.resolution)
 
 
 evaluate = eqx.filter_jit(outputs)
@@ -338,7 +336,7 @@ def main(argv=None):
         f"{POLARIZATION_TOLERANCE}, each chip's placement {PLACEMENT_TOLERANCE} per axis) are assumed too."
     )
     report.text(
-        f"The layer's linear field at {RESOLUTION[quick]} nodes (across, across, through), the bounds' map {MAP_GRID[quick]} contact positions over the chips' "
+        f"The layer's linear field at {RESOLUTION} nodes (across, across, through), the bounds' map {MAP_GRID[quick]} contact positions over the chips' "
         f"bounding box. {QUICK_NOTE if quick else FULL_NOTE}"
     )
 
@@ -435,7 +433,7 @@ def main(argv=None):
             "depth": DEPTH,
             "sphere_radius": SPHERE,
             "skin_side": SKIN_SIDE,
-            "resolution": RESOLUTION[quick],
+            "resolution": RESOLUTION,
             "map_grid": MAP_GRID[quick],
         },
     )

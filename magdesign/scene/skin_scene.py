@@ -5,8 +5,9 @@ skins", 2021), pressed by a rigid sphere or a flat punch.
 Scene frame: the board's surface is z = 0; the layer (thickness h, sides L_x x L_y,
 centred on the origin) fills 0 <= z <= h, bonded to the board; the chips' sensing points
 sit ``depth`` below the surface, at the given (x, y). The layer carries a uniform
-polarization J = J0 d (T, d a static unit vector: through the thickness or in-plane). The chips' positions are each a pair of
-scalars (x, y), so that a design can move one chip along one axis (``sensor.chips[i][k]``);
+polarization J = J0 d (T, d a static unit vector: through the thickness or in-plane). The
+chips' positions are each a pair of scalars (x, y), so that a design can move one chip
+along one axis (``sensor.chips[i][k]``);
 a grid's chips are its unit offsets times ``pitch`` (``sensor.pitch``), so that a design can
 space the whole grid.
 
@@ -16,9 +17,10 @@ a = (3 Fn R / (4 E*))^(1/3) with Hertz's pressure and a shear traction of the sa
 (:mod:`magdesign.mechanics.skin_layer`; the half-space contact radius holds for a / h up to
 about 0.3 and is 3 % off at 0.5); below the force CONTACT_FORCE_FLOOR the patch keeps that
 force's radius (the displacement, proportional to the forces on a given patch, is then nil
-anyway). A rigid flat punch (``indenter="flat"``, the spec's ``indenter.shape``) of radius R presses a patch of its own
-radius, whatever the force, with Boussinesq's pressure Fn / (2 pi R^2 sqrt(1 - r^2 / R^2))
-and a shear traction of that shape (the same reach in R / h as Hertz's patch).
+anyway). A rigid flat punch (``indenter="flat"``, the spec's ``indenter.shape``) of radius
+R presses a patch of its own radius, whatever the force, with Boussinesq's pressure
+Fn / (2 pi R^2 sqrt(1 - r^2 / R^2)) and a shear traction of that shape (the same reach in
+R / h as Hertz's patch).
 
 The layer's displacement field (linear elasticity: displacements small against h) moves its
 particles and turns them with the material's rotation curl(u) / 2. Two field models
@@ -139,6 +141,15 @@ def band_limited_grid(periods: tuple[int, int], levels: int) -> SpectralGrid:
     return SpectralGrid(periods=tuple(periods), refine=((1, 1),) * levels)
 
 
+def linear_grid(size, thickness, resolution: tuple[int, int, int]) -> SpectralGrid:
+    """The linear field's lattice for a layer of sides ``size`` (m, (2,)) and ``thickness``
+    (m), concrete, at ``resolution`` (n_x, n_y, Gauss nodes): :func:`spectral_grid`'s periods
+    (the layer and its padding) for the node grid, cut at its wavenumbers."""
+    nx, ny, nodes = resolution
+    plane = spectral_grid(size=size, thickness=thickness, cells=(nx, ny, 1))
+    return band_limited_grid(plane.periods, nodes)
+
+
 def _chip_pairs(chips) -> tuple[tuple[Float[Array, ""], Float[Array, ""]], ...]:
     """Chips' positions (S, 2) as S pairs of scalars (x, y): leaves a design sets one by one."""
     rows = jnp.asarray(chips, dtype=float)
@@ -210,9 +221,7 @@ class SkinScene(AbstractScene):
         if linear and self.resolution is None:
             self.resolution = default_resolution(self.size, self.depth)
         if self.spectral is None and linear:
-            nx, ny, nodes = self.resolution
-            plane = spectral_grid(size=self.size, thickness=self.thickness, cells=(nx, ny, 1))
-            self.spectral = band_limited_grid(plane.periods, nodes)
+            self.spectral = linear_grid(self.size, self.thickness, self.resolution)
         elif self.spectral is None:
             self.spectral = spectral_grid(size=self.size, thickness=self.thickness, cells=self.cells)
 
