@@ -213,7 +213,7 @@ LADDERS = (
 )
 
 
-def steps(ladder: Ladder, spec: dict) -> tuple[Mapping[str, object], ...]:
+def levels_for(ladder: Ladder, spec: dict) -> tuple[Mapping[str, object], ...]:
     """``ladder``'s levels for ``spec``, cheapest first."""
     return ladder.levels(spec) if callable(ladder.levels) else ladder.levels
 
@@ -221,7 +221,7 @@ def steps(ladder: Ladder, spec: dict) -> tuple[Mapping[str, object], ...]:
 def at_level(spec: dict, ladder: Ladder, index: int) -> dict:
     """A copy of ``spec`` with ``ladder``'s model at its level ``index``."""
     changed = copy.deepcopy(spec)
-    for dotted, value in steps(ladder, spec)[index].items():
+    for dotted, value in levels_for(ladder, spec)[index].items():
         name, key = dotted.split(".")
         entry = changed.setdefault(name, {})
         for table in entry if isinstance(entry, list) else [entry]:
@@ -252,7 +252,7 @@ def _neighbour(spec, ladder):
     """(the spec with ``ladder``'s model one level finer, or at the top one level coarser;
     whether it is finer), or None for a closed-form top."""
     rank = ladder.rank(spec)
-    ranks = [ladder.rank(at_level(spec, ladder, i)) for i in range(len(steps(ladder, spec)))]
+    ranks = [ladder.rank(at_level(spec, ladder, i)) for i in range(len(levels_for(ladder, spec)))]
     finer = [i for i, r in enumerate(ranks) if r > rank]
     if finer:
         return at_level(spec, ladder, finer[0]), True
@@ -493,7 +493,7 @@ class AccurateDesign(NamedTuple):
 def _cheapest(spec, ladder):
     """The cheapest level of ``ladder`` at which ``spec``'s scene builds (a reduced pole
     needs its demagnetizing factor, an axisymmetric dome a finite-strain law)."""
-    for index in range(len(steps(ladder, spec))):
+    for index in range(len(levels_for(ladder, spec))):
         try:
             scene_from_spec(at_level(spec, ladder, index))
         except SpecError:
@@ -550,7 +550,7 @@ def solve_to_accuracy(spec: dict, *, accuracy: float) -> AccurateDesign:
             ladder
             for ladder in steps
             if ladder.model in loose
-            and (index[ladder.model] == len(steps(ladder, spec)) - 1 or ladder.model in estimates.failed)
+            and (index[ladder.model] == len(levels_for(ladder, spec)) - 1 or ladder.model in estimates.failed)
         ]
         if not loose or stuck:
             why = "; ".join(

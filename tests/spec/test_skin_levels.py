@@ -15,10 +15,11 @@ from magdesign.spec.levels import (
     _neighbour,
     at_level,
     estimate,
+    levels_for,
     levels_of,
     outputs_at,
     skin_field_error,
-    steps,
+    solve_to_accuracy,
 )
 from magdesign.units import parse
 
@@ -35,7 +36,7 @@ def test_the_skins_levels_are_its_linear_fields_resolutions():
     # 30 mm sides over chips 1 mm deep: 2 nodes per depth across, 6 Gauss nodes
     default = (60, 60, 6)
     assert default_resolution([30e-3, 30e-3], 1e-3) == default
-    resolutions = [tuple(level["magnet.resolution"]) for level in steps(SKIN, spec)]
+    resolutions = [tuple(level["magnet.resolution"]) for level in levels_for(SKIN, spec)]
     assert resolutions == [(30, 30, 2), default, (120, 120, 10)]
     # each level is the field's finer resolution of the one below: the pair SkinScene.field_error compares
     assert finer(resolutions[0]) == resolutions[1] and finer(resolutions[1]) == resolutions[2]
@@ -149,3 +150,22 @@ def test_the_estimate_bounds_the_error_against_a_much_finer_field(layer):
         for name, value in exact.items():
             error = abs(values[name] - value)
             assert error <= estimates.outputs[name].absolute, (index, name, error, estimates.outputs[name])
+
+
+@pytest.mark.slow
+@pytest.mark.filterwarnings("ignore::magdesign.spec.checks.PlausibilityWarning")
+def test_an_accuracy_picks_the_skins_level():
+    """A design of J0 for a 10 mN normal-force bound at 5 %: the coarse level's estimate (its
+    error there is about 70 %, test above) raises the field to the default resolution, whose
+    estimate of the target is within 5 %."""
+    spec = _layer_a()
+    spec["design"] = {
+        "variables": {"magnet.polarization": {"lower": "5 mT", "upper": "200 mT"}},
+        "targets": {"force_resolution_normal": "0.01 N"},
+    }
+    accurate = solve_to_accuracy(spec, accuracy=0.05)
+    assert accurate.reached, accurate.why
+    assert [levels for levels, _ in accurate.answers] == ["skin linear 8x8x2", "skin linear 16x16x6"]
+    assert accurate.levels == {"skin": "linear 16x16x6"}
+    assert accurate.result.outputs["force_resolution_normal"] == pytest.approx(0.01, rel=1e-6)
+    assert accurate.estimates.outputs["force_resolution_normal"].relative <= 0.05
