@@ -48,15 +48,21 @@ def number(value, digits: int = 4) -> str:
     return f"{value:.{digits}g}"
 
 
-class Report:
-    """A study's report, built in order and written once by :meth:`write`."""
+# The banner of a quick-mode report, unless the study says what its quick mode does.
+QUICK_NOTE = "small grids and the cheapest fidelity; numbers are coarse."
 
-    def __init__(self, name: str, title: str, out: pathlib.Path, quick: bool):
+
+class Report:
+    """A study's report, built in order and written once by :meth:`write`. In quick mode it
+    opens with a banner, "Quick mode: " and ``quick_note`` (what the study's quick mode
+    leaves out; QUICK_NOTE by default)."""
+
+    def __init__(self, name: str, title: str, out: pathlib.Path, quick: bool, quick_note: str = QUICK_NOTE):
         self.name, self.out, self.quick = name, pathlib.Path(out), quick
         self.out.mkdir(parents=True, exist_ok=True)
         self.lines = [f"# {title}", ""]
         if quick:
-            self.lines += ["*Quick mode: small grids and the cheapest fidelity; numbers are coarse.*", ""]
+            self.lines += [f"*Quick mode: {quick_note}*", ""]
         self.results: dict = {"study": name, "quick": quick}
         self.figures: list[str] = []
 

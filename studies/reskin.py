@@ -14,9 +14,9 @@ The study builds that skin (magdesign.scene.skin_scene.SkinScene) and
    the chips and the Earth's field as an error in force, at the paper's 0.1 N;
 2. sweeps the chips' pitch and the skin's thickness (one compiled scene structure: the
    pitch moves the chips, the thickness is a parameter), with the first-order spread of each
-   output under the tolerances of the magnetisation and the chips' placement (forward
-   differences through magdesign.design.tolerance.perturb), and a Monte Carlo of those
-   tolerances at ReSkin's design;
+   output under the tolerances of the magnetisation and the chips' placement
+   (magdesign.design.tolerance.first_order), and a Monte Carlo of those tolerances at
+   ReSkin's design (magdesign.design.tolerance.monte_carlo);
 3. solves the polarisation that halves ReSkin's normal-force bound with the same chips and
    no chip saturating (magdesign.design.solve), and checks the answer with the sweep's scene.
 
@@ -27,14 +27,14 @@ magnetisation, the chips' noise, the indenter) is an assumption named in the rep
 """
 
 import dataclasses
+import math
 
 import equinox as eqx
-import jax.numpy as jnp
 import numpy as np
 from _report import Report, arguments, progress
 
 from magdesign.design import solve
-from magdesign.design.tolerance import perturb
+from magdesign.design.tolerance import first_order, monte_carlo
 from magdesign.mechanics.skin_layer import SpectralGrid
 from magdesign.scene import loads_from_spec, outputs, with_parameters
 from magdesign.scene.skin_scene import linear_grid
@@ -100,20 +100,13 @@ THICKNESSES = {True: (2 * mm, 3 * mm), False: (1.5 * mm, 2 * mm, 2.5 * mm, 3 * m
 RESOLUTION = (40, 40, 6)
 MAP_GRID = {True: (2, 2), False: (5, 5)}
 SAMPLES = {True: 8, False: 40}
-# The sweep's cells whose spreads are computed (17 evaluations each): two corners in quick
+# The sweep's cells whose spreads are computed (a forward-mode Jacobian each): two corners in quick
 # mode, the two extreme corners in full mode (ReSkin's own is computed at the board's chips)
 SPREAD_CELLS = {
     True: ((6 * mm, 2 * mm), (8 * mm, 3 * mm)),
     False: ((5 * mm, 1.5 * mm), (9 * mm, 3 * mm)),
 }
-STEP = 0.01  # unit sigmas: the forward differences' step along each tolerance's variate
 SEED = 0
-# The yield's limits (SI): a 3-sigma detection of 0.1 N, a 1 mm localisation, no chip saturating
-LIMITS = {
-    "force_resolution_normal": DETECTED_FORCE / DETECTION_SIGMAS,
-    "localisation_worst": LOCALISATION,
-    "saturation_ratio": 1.0,
-}
 
 OUTPUTS = (
     "force_resolution_normal",
@@ -187,7 +180,8 @@ def design_spec(chips, *, quick: bool, target: float) -> dict:
 
 def tolerance_spec(chips, *, quick: bool) -> dict:
     """ReSkin's skin with the tolerances of J0 and the chips' placement; the yield's limits
-    are the paper's figures (a 3-sigma detection of 0.1 N, a 1 mm localisation)."""
+    are the paper's figures (a 3-sigma detection of 0.1 N, a 1 mm localisation); every
+    output reported, so that the Monte Carlo gives each."""
     spec = skin_spec(chips, quick=quick)
     low, high = DESIGN_BOUNDS
     spec["design"] = {
@@ -198,6 +192,7 @@ def tolerance_spec(chips, *, quick: bool) -> dict:
             "saturation_ratio": {"upper": 1},
         },
         "tolerances": {"magnet.polarization": POLARIZATION_TOLERANCE, "placement": PLACEMENT_TOLERANCE},
+        "report": list(OUTPUTS),
     }
     return spec
 
@@ -210,6 +205,7 @@ def shared_grid(scene, thicknesses) -> SpectralGrid:
 
 
 evaluate = eqx.filter_jit(outputs)
+first_order_parts = eqx.filter_jit(first_order)
 
 
 def plain(values: dict) -> dict:
@@ -234,42 +230,33 @@ def saturating_force(scene, quick: bool) -> tuple[float, int, float]:
     return forces[chip], chip, rest
 
 
-def spreads(tp, scene, loads, nominal: dict) -> dict:
+def spreads(tp, scene) -> dict:
     """{output: {"total": first-order standard deviation, group: its part}} (SI) of
     ``scene``'s outputs under the tolerances of ``tp``, the parts by group of variates
-    ("magnet.polarization", "placement.x": every chip's x, ...) in quadrature: forward
-    differences of STEP unit sigmas along each variate (magdesign.design.tolerance.perturb),
-    through the one compiled outputs, which every cell of the sweep shares."""
-    labels, unit_std = tp.labels, np.asarray(tp.unit_std)
-    squares = {name: {} for name in OUTPUTS}
-    for i, label in enumerate(labels):
-        u = np.zeros(len(labels))
-        u[i] = STEP
-        moved = plain(evaluate(perturb(scene, tp.inputs, tp.sensors, jnp.asarray(u)), loads))
-        for name in OUTPUTS:
-            part = (moved[name] - nominal[name]) / STEP * unit_std[i]
-            squares[name][label] = squares[name].get(label, 0.0) + part**2
-    return {
-        name: {"total": float(np.sqrt(sum(part.values()))), **{k: float(np.sqrt(v)) for k, v in part.items()}}
-        for name, part in squares.items()
-    }
+    ("magnet.polarization", "placement.x": every chip's x, ...) in quadrature: the library's
+    first-order parts (magdesign.design.tolerance.first_order, forward-mode derivatives along
+    each variate), through one compiled program that every cell of the sweep shares."""
+    _, parts = first_order_parts(tp, scene)
+    result = {}
+    for name in OUTPUTS:
+        squares = {}
+        for label, part in zip(tp.labels, np.asarray(parts[name])):
+            squares[label] = squares.get(label, 0.0) + float(part) ** 2
+        result[name] = {"total": math.sqrt(sum(squares.values())), **{k: math.sqrt(v) for k, v in squares.items()}}
+    return result
 
 
-def sampled(tp, scene, loads, samples: int) -> dict:
-    """A Monte Carlo of the tolerances (normal variates, seed SEED) through the compiled
-    outputs: each output's mean and standard deviation, and the yield against the paper's
-    figures (LIMITS)."""
-    draws = np.random.default_rng(SEED).standard_normal((samples, len(tp.labels)))
-    values = [plain(evaluate(perturb(scene, tp.inputs, tp.sensors, jnp.asarray(u)), loads)) for u in draws]
-    table = {name: np.array([v[name] for v in values]) for name in OUTPUTS}
-    passing = np.all([table[name] <= upper for name, upper in LIMITS.items()], axis=0)
-    fraction = float(passing.mean())
+def sampled(tp, samples: int) -> dict:
+    """The library's Monte Carlo of the tolerances at ReSkin's J0
+    (magdesign.design.tolerance.monte_carlo, seed SEED): each output's mean and standard
+    deviation, and the yield against the design's limits (the paper's figures)."""
+    run = monte_carlo(tp, {"magnet.polarization": POLARIZATION}, samples=samples, seed=SEED, progress=False)
     return {
-        "samples": samples,
-        "seed": SEED,
-        "yield": fraction,
-        "yield_stderr": float(np.sqrt(fraction * (1 - fraction) / samples)),
-        "outputs": {name: {"mean": float(v.mean()), "std": float(v.std())} for name, v in table.items()},
+        "samples": run.samples,
+        "seed": run.seed,
+        "yield": run.yield_fraction,
+        "yield_stderr": run.yield_stderr,
+        "outputs": {name: {"mean": run.outputs[name]["mean"], "std": run.outputs[name]["std"]} for name in OUTPUTS},
     }
 
 
@@ -282,7 +269,7 @@ def sweep(tp, scene, loads, quick: bool) -> list[dict]:
         for thickness in THICKNESSES[quick]:
             cell = with_parameters(at_pitch, {"mechanics.thickness": thickness})
             values = plain(evaluate(cell, loads))
-            spread = spreads(tp, cell, loads, values) if (pitch, thickness) in SPREAD_CELLS[quick] else None
+            spread = spreads(tp, cell) if (pitch, thickness) in SPREAD_CELLS[quick] else None
             rows.append({"pitch": pitch, "thickness": thickness, **values, "sigma": spread})
             progress(f"pitch {pitch / mm:g} mm, thickness {thickness / mm:g} mm")
     return rows
@@ -291,7 +278,9 @@ def sweep(tp, scene, loads, quick: bool) -> list[dict]:
 def main(argv=None):
     args = arguments(NAME, argv, __doc__, plot=True)
     quick = args.quick
-    report = Report(NAME, "ReSkin: a magnetised skin over five MLX90393 chips (Bhirangi et al. 2021)", args.out, quick)
+    report = Report(
+        NAME, "ReSkin: a magnetised skin over five MLX90393 chips (Bhirangi et al. 2021)", args.out, quick, BANNER
+    )
     chips = board_chips()
     pitch = float(np.mean(np.linalg.norm(chips[1:], axis=1)))
     # the skin with its tolerances' effects (placement, at zero: the same outputs), on the
@@ -305,12 +294,12 @@ def main(argv=None):
     contact_radius = float(scene.contact_radius(DETECTED_FORCE))
     f_sat, sat_chip, rest_ratio = saturating_force(scene, quick)
     j0_saturating = POLARIZATION / rest_ratio  # the rest field is linear in J0
-    base_spread = spreads(tp, scene, loads, base)
+    base_spread = spreads(tp, scene)
 
     progress("the sweep of pitch and thickness")
     rows = sweep(tp, scene, loads, quick)
     progress(f"Monte Carlo of the tolerances at ReSkin's design ({SAMPLES[quick]} samples)")
-    mc = sampled(tp, scene, loads, SAMPLES[quick])
+    mc = sampled(dataclasses.replace(tp, scene=scene), SAMPLES[quick])
 
     progress(
         "the design: half ReSkin's normal-force bound with the same chips, no chip saturating (compiles derivatives)"
@@ -363,7 +352,7 @@ def main(argv=None):
     report.text(
         "The chips in the board's cross at each pitch, the skin at each thickness, pressed with 0.1 N; '+-' is the "
         f"first-order standard deviation under the tolerances (J0 {POLARIZATION_TOLERANCE}, each chip's placement "
-        f"{PLACEMENT_TOLERANCE} per axis), by forward differences along each variate "
+        f"{PLACEMENT_TOLERANCE} per axis), from the derivative along each variate "
         f"(at the sweep's cells {', '.join(f'({p / mm:g}, {h / mm:g}) mm' for p, h in SPREAD_CELLS[quick])})."
     )
     report.table(SWEEP_HEADERS, [sweep_cells(row) for row in rows])
@@ -456,6 +445,12 @@ def main(argv=None):
     report.write()
 
 
+# Quick mode's banner: what it shares with full mode and what it leaves out.
+BANNER = (
+    f"the field at full mode's resolution, {RESOLUTION} nodes; a {MAP_GRID[True][0]} x {MAP_GRID[True][1]} map of "
+    f"contact positions, the corners of the chips' box (full mode's is {MAP_GRID[False][0]} x {MAP_GRID[False][1]}), "
+    f"a {len(PITCHES[True])} x {len(THICKNESSES[True])} sweep and {SAMPLES[True]} Monte Carlo samples."
+)
 QUICK_NOTE = (
     "Quick mode checks the study's pipeline: its field is full mode's, but its 2 x 2 map holds only the corners of "
     "the chips' box (at ReSkin's design the worst bounds lie there too), and its sweep and Monte Carlo are small."

@@ -8,8 +8,9 @@ model at a time is raised to its next level (at its ladder's top: lowered to the
 below, the estimate from the top two): the move itself from a cheaper model to a finer one;
 between two meshes or cell sizes, the model's own rule where it has one (the dome's mesh
 ladder: :func:`magdesign.mechanics.dome.dome_compliance`'s estimate, measured on its
-meshes) and else Roache's grid convergence index of the move (:func:`grid_factor`); the
-largest over the models, and the model that made it.
+meshes; a skin's linear field: :func:`skin_field_error`) and else Roache's grid
+convergence index of the move (:func:`grid_factor`); the largest over the models, and the
+model that made it.
 """
 
 import copy
@@ -25,11 +26,14 @@ from magdesign._numerics import ROUNDING_SPREAD
 from magdesign._progress import stage
 from magdesign.design import solve
 from magdesign.design.report import DesignResult, format_quantity
+from magdesign.fields.layer_field import FINER_NODES, finer
 from magdesign.mechanics._ladder import bound as dome_mesh_error
 from magdesign.mechanics.dome import MESH_LADDER
 from magdesign.scene import MECHANICS_CONVERGED, loads_from_spec, outputs, with_parameters
+from magdesign.scene.skin_scene import default_resolution
 from magdesign.spec.design import problem_from_spec
 from magdesign.spec.scene import POLE_CELLS, SOFT_CELLS, scene_from_spec
+from magdesign.spec.table import Table
 from magdesign.units import SpecError
 
 # The axisymmetric dome's meshes (its own ladder), the moments pole's cells along its rod
@@ -68,6 +72,56 @@ def _soft_rank(spec):
     return min(part.get("cells", SOFT_CELLS) for part in spec["soft"])
 
 
+def _skin_applies(spec):
+    magnet = _table(spec, "magnet")
+    return magnet.get("shape") == "skin" and magnet.get("field", "linear") == "linear" and "magnets" not in magnet
+
+
+def _skin_default(spec):
+    """The skin's linear field's default (n_x, n_y, Gauss nodes) for its layer and chips
+    (:func:`~magdesign.scene.skin_scene.default_resolution`)."""
+    size = Table(spec, "mechanics").quantities("size", "m", length=2)
+    depth = Table(spec, "sensor").quantity("depth", "m")
+    return default_resolution(size, depth)
+
+
+def _skin_resolution(spec):
+    given = _table(spec, "magnet").get("resolution")
+    return _skin_default(spec) if given is None else tuple(given)
+
+
+def _skin_rank(spec):
+    """The linear field's in-plane resolution sqrt(n_x n_y)."""
+    nx, ny, _ = _skin_resolution(spec)
+    return math.sqrt(nx * ny)
+
+
+def _skin_levels(spec):
+    """The linear field's resolutions, each the :func:`~magdesign.fields.layer_field.finer`
+    of the one before: half the default's nodes across (at least 2) and FINER_NODES fewer
+    Gauss nodes (at least 1), the default, and its finer one."""
+    default = _skin_default(spec)
+    nx, ny, nodes = default
+    coarse = (max(2, -(-nx // 2)), max(2, -(-ny // 2)), max(1, nodes - FINER_NODES))
+    return tuple({"magnet.resolution": list(resolution)} for resolution in (coarse, default, finer(default)))
+
+
+# A skin's outputs converge at an order of 1.5 to 2.5 in the linear field's node spacing
+# (each doubling of the nodes across cut their error 3 to 6 times, measured against 4 times
+# the default's nodes on two layers: tests/spec/test_skin_levels.py): a level's error is its
+# move to the next finer level plus that level's error, at most the move again for an order
+# of 1 or more, so the estimate is SKIN_FINER_FACTOR times the move; at the top, compared
+# with the level below, the move itself (the coarser level's error, which bounds the finer's).
+SKIN_FINER_FACTOR = 2.0
+
+
+def skin_field_error(value, other, other_is_finer):
+    """The skin's estimate of an output ``value`` from its ``other`` value at the neighbouring
+    resolution (finer where ``other_is_finer``), in the output's unit: SKIN_FINER_FACTOR
+    times their difference from a finer level, the difference itself from a coarser one."""
+    return (SKIN_FINER_FACTOR if other_is_finer else 1.0) * abs(value - other)
+
+
 @dataclasses.dataclass(frozen=True)
 class Ladder:
     """One model's levels, cheapest first.
@@ -76,7 +130,8 @@ class Ladder:
         model: its name in reports ("dome").
         applies: whether a spec runs the model.
         levels: each level as {"table.key": value} set in the spec (None: the key dropped;
-            in an array of tables, [[soft]], set in each table).
+            in an array of tables, [[soft]], set in each table), or a function of the spec
+            giving them (levels relative to the spec's own sizes: the skin's).
         rank: a spec's place on the ladder: 0 at a cheaper model's level, else the linear
             resolution of the discretisation (elements or cells along a length).
         label: a spec's level in words ("axisymmetric 3x24").
@@ -91,7 +146,7 @@ class Ladder:
 
     model: str
     applies: Callable[[dict], bool]
-    levels: tuple[Mapping[str, object], ...]
+    levels: tuple[Mapping[str, object], ...] | Callable[[dict], tuple[Mapping[str, object], ...]]
     rank: Callable[[dict], float]
     label: Callable[[dict], str]
     closed_top: bool = False
@@ -145,13 +200,28 @@ LADDERS = (
         _soft_rank,
         lambda spec: f"{_soft_rank(spec)} cells",
     ),
+    # A skin's uniformly magnetised layer: its linear field's resolution (the rigid cells and
+    # an eFlesh-like skin's magnets have no ladder).
+    Ladder(
+        "skin",
+        _skin_applies,
+        _skin_levels,
+        _skin_rank,
+        lambda spec: "linear {}x{}x{}".format(*_skin_resolution(spec)),
+        mesh_error=skin_field_error,
+    ),
 )
+
+
+def levels_for(ladder: Ladder, spec: dict) -> tuple[Mapping[str, object], ...]:
+    """``ladder``'s levels for ``spec``, cheapest first."""
+    return ladder.levels(spec) if callable(ladder.levels) else ladder.levels
 
 
 def at_level(spec: dict, ladder: Ladder, index: int) -> dict:
     """A copy of ``spec`` with ``ladder``'s model at its level ``index``."""
     changed = copy.deepcopy(spec)
-    for dotted, value in ladder.levels[index].items():
+    for dotted, value in levels_for(ladder, spec)[index].items():
         name, key = dotted.split(".")
         entry = changed.setdefault(name, {})
         for table in entry if isinstance(entry, list) else [entry]:
@@ -182,7 +252,7 @@ def _neighbour(spec, ladder):
     """(the spec with ``ladder``'s model one level finer, or at the top one level coarser;
     whether it is finer), or None for a closed-form top."""
     rank = ladder.rank(spec)
-    ranks = [ladder.rank(at_level(spec, ladder, i)) for i in range(len(ladder.levels))]
+    ranks = [ladder.rank(at_level(spec, ladder, i)) for i in range(len(levels_for(ladder, spec)))]
     finer = [i for i, r in enumerate(ranks) if r > rank]
     if finer:
         return at_level(spec, ladder, finer[0]), True
@@ -236,7 +306,7 @@ def outputs_at(spec: dict, values: Mapping[str, float] | None = None) -> dict[st
 class Estimate(NamedTuple):
     """The estimated error of one output: ``absolute`` (SI, in the output's unit),
     ``relative`` (of the output's value; None where it is 0), ``model`` (the model whose
-    neighbouring level moved it most: "dome", "field", "pole", "soft")."""
+    neighbouring level moved it most: "dome", "field", "pole", "soft", "skin")."""
 
     absolute: float
     relative: float | None
@@ -423,7 +493,7 @@ class AccurateDesign(NamedTuple):
 def _cheapest(spec, ladder):
     """The cheapest level of ``ladder`` at which ``spec``'s scene builds (a reduced pole
     needs its demagnetizing factor, an axisymmetric dome a finite-strain law)."""
-    for index in range(len(ladder.levels)):
+    for index in range(len(levels_for(ladder, spec))):
         try:
             scene_from_spec(at_level(spec, ladder, index))
         except SpecError:
@@ -480,7 +550,7 @@ def solve_to_accuracy(spec: dict, *, accuracy: float) -> AccurateDesign:
             ladder
             for ladder in steps
             if ladder.model in loose
-            and (index[ladder.model] == len(ladder.levels) - 1 or ladder.model in estimates.failed)
+            and (index[ladder.model] == len(levels_for(ladder, spec)) - 1 or ladder.model in estimates.failed)
         ]
         if not loose or stuck:
             why = "; ".join(
