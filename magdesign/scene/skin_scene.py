@@ -141,12 +141,12 @@ def default_resolution(size, depth, period=None) -> tuple[int, int, int]:
     """The linear field's default (n_x, n_y, Gauss nodes) for a layer of sides ``size`` (m,
     (2,)) over chips ``depth`` (m) below it, patterned with ``period`` (m; None: uniform),
     from their concrete values (module docstring)."""
-    sides, depth = _concrete(size), _concrete(depth)
-    period = None if period is None else _concrete(period)
-    if sides is None or depth is None:
-        raise ValueError("default_resolution needs the concrete size and depth (not traced values)")
+    patterned = period is not None
+    sides, depth, period = _concrete(size), _concrete(depth), _concrete(period) if patterned else None
+    if sides is None or depth is None or (patterned and period is None):
+        raise ValueError("default_resolution needs the concrete size, depth and period (not traced values)")
     n = [max(2, math.ceil(NODES_PER_DEPTH * float(side) / float(depth))) for side in sides]
-    if period is not None:
+    if patterned:
         n[0] = max(n[0], math.ceil(NODES_PER_PERIOD * float(sides[0]) / float(period)))
     return (n[0], n[1], GAUSS_NODES)
 
