@@ -5,7 +5,13 @@ skins", 2021), pressed by a rigid sphere or a flat punch.
 Scene frame: the board's surface is z = 0; the layer (thickness h, sides L_x x L_y,
 centred on the origin) fills 0 <= z <= h, bonded to the board; the chips' sensing points
 sit ``depth`` below the surface, at the given (x, y). The layer carries a uniform
-polarization J = J0 d (T, d a static unit vector: through the thickness or in-plane). The
+polarization J = J0 d (T, d a static unit vector: through the thickness or in-plane), or,
+with a ``period`` T, the sinusoidal film's Halbach pattern along x, J(x) = J0 R_y(k x) d,
+k = 2 pi / T: d turned about y by k x (:func:`magdesign.fields.layer_field.pattern`; with
+d = (0, 0, -1), J0 (-sin kx, 0, -cos kx), the film's pattern of
+:class:`~magdesign.scene.FilmScene`, strong side down towards the chips, x = 0 the layer's
+centre and a peak of its z component). The layer carries the pattern as its sides cut it,
+uniform along y. The
 chips' positions are each a pair of scalars (x, y), so that a design can move one chip
 along one axis (``sensor.chips[i][k]``);
 a grid's chips are its unit offsets times ``pitch`` (``sensor.pitch``), so that a design can
@@ -29,9 +35,11 @@ particles and turns them with the material's rotation curl(u) / 2. Two field mod
 - ``"linear"`` (the default): the field to first order in the displacement, the block's
   exact field plus the integral of the moved and turned particles' dipoles over the layer
   (:func:`magdesign.fields.layer_field.layer_field`), on ``resolution`` (n_x, n_y, Gauss
-  nodes; static: by :func:`default_resolution`, 2 nodes per ``depth`` across the layer and
-  GAUSS_NODES through it, from the concrete values at construction). The displacement and
-  rotation at the nodes come from the layer's Fourier sums
+  nodes; static: by :func:`default_resolution`, 2 nodes per ``depth`` across the layer, and
+  NODES_PER_PERIOD per period of a pattern, and GAUSS_NODES through it, from the concrete
+  values at construction). A patterned layer's undeformed field is a sum of slabs across x
+  (:func:`~magdesign.fields.layer_field.pattern_field`, its error stated there). The
+  displacement and rotation at the nodes come from the layer's Fourier sums
   (:func:`magdesign.mechanics.skin_layer.layer_displacement_grid`) cut at the node grid's own
   wavenumbers (:func:`band_limited_grid`, the reason in the field's module). Its
   discretisation error is :meth:`SkinScene.field_error`, the change to the finer resolution
@@ -39,9 +47,10 @@ particles and turns them with the material's rotation curl(u) / 2. Two field mod
   the largest change of the field at the chips under a press.
 - ``"cells"``: the layer cut into ``cells`` rigid cuboid cells
   (:mod:`magdesign.fields.cells`), each moved by the displacement at its centre and turned by
-  the rotation there (:func:`magdesign.fields.cells.carried_cells`), the displacement and
-  rotation from the Fourier sums on the cell grid (about 1e-4 of the peak displacement from
-  the Hankel quadrature's values) on the lattice ``spectral`` (static:
+  the rotation there (:func:`magdesign.fields.cells.carried_cells`), each cell carrying the
+  pattern's J at its centre where the layer is patterned, the displacement and rotation from
+  the Fourier sums on the cell grid (about 1e-4 of the peak displacement from the Hankel
+  quadrature's values) on the lattice ``spectral`` (static:
   :func:`~magdesign.mechanics.skin_layer.spectral_grid` of the size and thickness the scene is
   built with, unless given). A cell as thick as the layer moves its bonded bottom face with
   its centre, and a cell wider than the contact patch spreads the press over its width: the
@@ -93,7 +102,7 @@ from jaxtyping import Array, Float
 
 from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
-from magdesign.fields.layer_field import finer, gauss_levels, layer_field
+from magdesign.fields.layer_field import finer, gauss_levels, layer_field, pattern
 from magdesign.mechanics.skin_layer import (
     ElasticLayer,
     SpectralGrid,
@@ -115,7 +124,7 @@ CONTACT_FORCE_FLOOR = 1e-3
 BACKGROUND_REFERENCE = 50 * uT
 # The unknowns of a load point and their units, the order of the Jacobian's columns.
 LOAD_UNKNOWNS = ("x", "y", "normal", "shear_x", "shear_y")
-# The uniformly magnetised layer's field models (module docstring).
+# The magnetised layer's field models (module docstring).
 FIELD_MODELS = ("linear", "cells")
 # What presses the skin, and the load profile of each (module docstring).
 INDENTERS = {"sphere": "hertz", "flat": "flat"}
@@ -123,15 +132,22 @@ INDENTERS = {"sphere": "hertz", "flat": "flat"}
 # chips' depth apart, and GAUSS_NODES heights through the thickness (module docstring).
 NODES_PER_DEPTH = 2.0
 GAUSS_NODES = 6
+# A patterned layer's in-plane nodes along x: at least this many per period, so that the
+# integrand's pattern (J(x') times the displacement's modes) is resolved as well.
+NODES_PER_PERIOD = 8
 
 
-def default_resolution(size, depth) -> tuple[int, int, int]:
+def default_resolution(size, depth, period=None) -> tuple[int, int, int]:
     """The linear field's default (n_x, n_y, Gauss nodes) for a layer of sides ``size`` (m,
-    (2,)) over chips ``depth`` (m) below it, from their concrete values (module docstring)."""
-    sides, depth = _concrete(size), _concrete(depth)
-    if sides is None or depth is None:
-        raise ValueError("default_resolution needs the concrete size and depth (not traced values)")
+    (2,)) over chips ``depth`` (m) below it, patterned with ``period`` (m; None: uniform),
+    from their concrete values (module docstring)."""
+    patterned = period is not None
+    sides, depth, period = _concrete(size), _concrete(depth), _concrete(period) if patterned else None
+    if sides is None or depth is None or (patterned and period is None):
+        raise ValueError("default_resolution needs the concrete size, depth and period (not traced values)")
     n = [max(2, math.ceil(NODES_PER_DEPTH * float(side) / float(depth))) for side in sides]
+    if patterned:
+        n[0] = max(n[0], math.ceil(NODES_PER_PERIOD * float(sides[0]) / float(period)))
     return (n[0], n[1], GAUSS_NODES)
 
 
@@ -172,7 +188,9 @@ class SkinMagnets(eqx.Module):
 class SkinScene(AbstractScene):
     """A magnetic skin over a chip array (module docstring); lengths (m), J0 (T), moduli (Pa).
 
-    ``direction`` (static): the polarization's unit vector; ``field`` (static): "linear" or
+    ``direction`` (static): the polarization's unit vector (at x = 0 where the layer is
+    patterned); ``period``: None for a uniform layer, else the pattern's period T (m; module
+    docstring); ``field`` (static): "linear" or
     "cells" (module docstring); ``resolution`` (static): the linear field's nodes (n_x, n_y,
     Gauss nodes), by default :func:`default_resolution`'s; ``cells`` (static): the layer's
     cells (n_x, n_y, n_z) of the "cells" field; ``map_grid`` (static): the outputs' contact
@@ -183,7 +201,7 @@ class SkinScene(AbstractScene):
     (m), given as an (S, 2) array and kept as pairs of scalars (each a design parameter); in
     units of ``pitch`` (m) where a pitch is given (a grid's unit offsets): the chips then sit
     at ``chips * pitch`` (:meth:`chip_positions`). ``magnets``: discrete magnets in an
-    unmagnetised layer (an eFlesh-like skin), or None for a uniformly magnetised layer.
+    unmagnetised layer (an eFlesh-like skin), or None for a magnetised layer.
     ``soft``: fixed soft-magnetic parts near the skin (nearby iron, ``[[soft]]``), magnetised
     by the skin's field under each load (:func:`~magdesign.scene.pose.soft_parts_field`).
     """
@@ -209,17 +227,23 @@ class SkinScene(AbstractScene):
     resolution: tuple[int, int, int] | None = eqx.field(static=True, default=None)
     indenter: str = eqx.field(static=True, default="sphere")
     soft: tuple[SoftPart, ...] = ()
+    period: Float[Array, ""] | None = None
 
     def __post_init__(self):
         if self.field not in FIELD_MODELS:
             raise ValueError(f"field must be one of {FIELD_MODELS}, got {self.field!r}")
         if self.indenter not in INDENTERS:
             raise ValueError(f"indenter must be one of {tuple(INDENTERS)}, got {self.indenter!r}")
+        if self.period is not None and (self.magnets is not None or self.direction[1] != 0.0):
+            raise ValueError(
+                "period: the pattern turns the layer's polarization in the x-z plane; expected no magnets and a "
+                f"direction without a y component, got {self.direction!r}"
+            )
         # the wavevector lattice and the linear field's nodes, from the values at construction
         # (module docstring)
         linear = self.field == "linear" and self.magnets is None
         if linear and self.resolution is None:
-            self.resolution = default_resolution(self.size, self.depth)
+            self.resolution = default_resolution(self.size, self.depth, self.period)
         if self.spectral is None and linear:
             self.spectral = linear_grid(self.size, self.thickness, self.resolution)
         elif self.spectral is None:
@@ -247,6 +271,8 @@ class SkinScene(AbstractScene):
             "sensor.depth": lambda s: s.depth,
             "indenter.radius": lambda s: s.sphere_radius,
         }
+        if self.period is not None:
+            paths["magnet.period"] = lambda s: s.period
         if self.pitch is not None:
             paths["sensor.pitch"] = lambda s: s.pitch
         else:
@@ -298,7 +324,7 @@ class SkinScene(AbstractScene):
         )
 
     def linear_field(self, points, load: SurfaceLoad, resolution=None):
-        """The uniformly magnetised layer's field B (T) at ``points`` (m, (..., 3)) under
+        """The magnetised layer's field B (T) at ``points`` (m, (..., 3)) under
         ``load``, first order in the displacement (:func:`magdesign.fields.layer_field.layer_field`),
         at ``resolution`` (n_x, n_y, Gauss nodes; static): the scene's, or its :func:`finer`
         one (the lattice's periods, a length, kept)."""
@@ -318,6 +344,7 @@ class SkinScene(AbstractScene):
             polarization=self.polarization * jnp.asarray(self.direction),
             displacement=u,
             rotation=rotation,
+            period=self.period,
         )
 
     def field_error(self, state: Float[Array, "5"]) -> Float[Array, "s 3"]:
@@ -325,7 +352,7 @@ class SkinScene(AbstractScene):
         under one load state (x, y, Fn, F_x, F_y): its change from the scene's resolution to
         the :func:`~magdesign.fields.layer_field.finer` one (module docstring)."""
         if self.field != "linear" or self.magnets is not None:
-            raise ValueError("field_error: only a uniformly magnetised layer's linear field has an estimate")
+            raise ValueError("field_error: only a magnetised layer's linear field has an estimate")
         points, _ = self.sensor_poses()
         load = self.surface_load(state)
         coarse = self.linear_field(points, load)
@@ -357,6 +384,8 @@ class SkinScene(AbstractScene):
         else:
             centres, dimension = layer_cells(size=self.size, thickness=self.thickness, cells=self.cells)
             polarization = jnp.broadcast_to(self.polarization * jnp.asarray(self.direction), centres.shape)
+            if self.period is not None:
+                polarization = pattern(centres[:, 0], self.period, polarization[0])
             u, rotation = layer_displacement_grid(
                 layer=self.layer(), load=load, size=self.size, cells=self.cells, grid=self.spectral
             )

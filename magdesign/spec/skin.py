@@ -155,6 +155,24 @@ def _skin_magnets(magnet, direction, size, thickness):
     return SkinMagnets(centres=centres, sizes=sizes, directions=directions)
 
 
+def _skin_period(magnet, direction):
+    """(magnet.period (m) or None, the direction): a patterned skin's polarization turns in the
+    x-z plane, from magnet.direction at x = 0, by default (0, 0, -1) (the film's pattern, strong
+    side down); a SpecError naming magnet.direction for a direction out of that plane."""
+    if not magnet.has("period"):
+        return None, direction
+    period = magnet.quantity("period", "m")  # the key table refuses 0 m or less, naming it
+    if direction is None:
+        return period, (0.0, 0.0, -1.0)
+    if abs(direction[1]) > 0.0:
+        raise SpecError(
+            f"magnet.direction: {np.round(np.asarray(direction), 6).tolist()} has a y component, but the "
+            "pattern of magnet.period turns the polarization about y (in the x-z plane); expected the "
+            "polarization at x = 0 in that plane, e.g. [0, 0, -1] (the film's pattern) or no magnet.direction"
+        )
+    return period, direction
+
+
 def _skin_soft_parts(spec, size, thickness, chips, depth):
     """[[soft]] parts near a skin: fixed (the load moves the layer only), apart from the
     layer and from the chips' sensing points; SpecError naming the part otherwise."""
@@ -190,7 +208,8 @@ def skin_scene(spec, fidelity):
     poisson_ratio = mechanics.quantity("poisson_ratio", "1")
     mechanics.done()
     magnets = _skin_magnets(magnet, direction, size, thickness)
-    for key in ("cells", "field", "resolution"):
+    period, direction = _skin_period(magnet, direction)
+    for key in ("cells", "field", "resolution", "period"):
         if magnets is not None and magnet.has(key):
             raise SpecError(
                 f"magnet.{key}: a skin with [[magnet.magnets]] has an unmagnetised layer (its magnets' own fields)"
@@ -232,7 +251,7 @@ def skin_scene(spec, fidelity):
             "a depth above 0 mm (the chips' sensing points under the skin's bottom face)"
         )
     if magnets is None and field == "linear":
-        resolution = resolution or default_resolution(size, depth)
+        resolution = resolution or default_resolution(size, depth, period)
         label, sources = f"magnet.resolution = {list(resolution)}", math.prod(finer(resolution))
     elif magnets is None:
         label, sources = f"magnet.cells = {list(cells)}", math.prod(cells)
@@ -268,4 +287,5 @@ def skin_scene(spec, fidelity):
         resolution=resolution,
         indenter=indenter_shape,
         soft=soft,
+        period=None if period is None else jnp.asarray(period),
     )
