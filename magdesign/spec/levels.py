@@ -78,11 +78,13 @@ def _skin_applies(spec):
 
 
 def _skin_default(spec):
-    """The skin's linear field's default (n_x, n_y, Gauss nodes) for its layer and chips
-    (:func:`~magdesign.scene.skin_scene.default_resolution`)."""
+    """The skin's linear field's default (n_x, n_y, Gauss nodes) for its layer, chips and
+    pattern (:func:`~magdesign.scene.skin_scene.default_resolution`)."""
     size = Table(spec, "mechanics").quantities("size", "m", length=2)
     depth = Table(spec, "sensor").quantity("depth", "m")
-    return default_resolution(size, depth)
+    magnet = Table(spec, "magnet")
+    period = magnet.quantity("period", "m") if magnet.has("period") else None
+    return default_resolution(size, depth, period)
 
 
 def _skin_resolution(spec):

@@ -51,6 +51,14 @@ def test_the_skins_levels_are_its_linear_fields_resolutions():
     assert _neighbour(spec, SKIN)[0]["magnet"]["resolution"] == [60, 60, 6]
 
 
+def test_a_patterned_skins_levels_resolve_its_period():
+    spec = _example("skin.toml")
+    spec["magnet"]["period"] = "2 mm"
+    # 30 mm sides patterned every 2 mm: 8 nodes per period along x (120) outnumber 2 per depth (60)
+    resolutions = [tuple(level["magnet.resolution"]) for level in levels_for(SKIN, spec)]
+    assert resolutions == [(60, 30, 2), (120, 60, 6), (240, 120, 10)]
+
+
 def test_skins_without_a_linear_field_have_no_ladder():
     assert levels_of(_example("eflesh.toml")) == {}  # discrete magnets
     spec = _example("skin.toml")
