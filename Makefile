@@ -10,21 +10,23 @@ DOCS_STAMP := $(VENV)/.installed-docs
 .PHONY: demo test test-all lint bench studies docs clean
 
 # Installs into .venv with uv where it is on PATH or can be bootstrapped into .venv from
-# PyPI (a fresh set-up in about 20 s), else with pip (about a minute). Both compile the
-# installed modules to bytecode (pip does by default, uv when asked), and the editable
-# package is compiled after: a run never compiles its imports itself, where Python may not
-# write bytecode (PYTHONDONTWRITEBYTECODE, a read-only checkout).
+# PyPI (a fresh set-up in about 20 s), else with pip (about a minute).
 define install
 	if command -v uv >/dev/null 2>&1; then UV=uv; \
 	elif $(PY) -m pip install --quiet --disable-pip-version-check uv >/dev/null 2>&1; then UV=$(VENV)/bin/uv; fi; \
-	if [ -n "$$UV" ] && $$UV pip install --quiet --compile-bytecode --python $(PY) $(1); then :; \
+	if [ -n "$$UV" ] && $$UV pip install --quiet --python $(PY) $(1); then :; \
 	else $(PY) -m pip install --quiet --disable-pip-version-check $(1); fi
 endef
 
+# Then the bytecode of magdesign and of every module the command imports is written (uv
+# writes none; compiling all of site-packages costs 15 s of CPU, these 3 s), so that where
+# Python may not write it (PYTHONDONTWRITEBYTECODE, a read-only .venv) no run compiles its
+# imports (2 s of CPU a run).
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@$(call install,-e '.[test]')
 	$(PY) -m compileall -q magdesign >/dev/null
+	PYTHONDONTWRITEBYTECODE= $(PY) -c "import magdesign.cli"
 	touch $(STAMP)
 
 demo: $(STAMP)
