@@ -9,10 +9,8 @@ from pathlib import Path
 import jax
 
 # Programs that took longer than this to compile are kept in the persistent cache (JAX's own
-# JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS, when set, wins): every one, so that the small
-# programs of single operations that reading a spec runs are kept too (a few kB each; their
-# compiles took a tenth of a second of each run).
-CACHE_MIN_COMPILE_SECONDS = 0.0
+# JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS, when set, wins).
+CACHE_MIN_COMPILE_SECONDS = 0.5
 
 
 def cpu_tag():
