@@ -28,10 +28,12 @@ Off unless :func:`enable` names a folder (the command does for its run, see
 
 import functools
 import hashlib
+import importlib.machinery
 import importlib.util
 import os
 import pickle
 import re
+import sys
 import tempfile
 import types
 from pathlib import Path
@@ -318,10 +320,39 @@ def _read(path, text):
         return None
 
 
+# The two extension modules whose function pointers are jaxlib's LAPACK kernels on CPU.
+_LAPACK_MODULES = ("scipy.linalg.cython_blas", "scipy.linalg.cython_lapack")
+
+
 @functools.cache
 def _lapack_ready():
     """Set up jaxlib's LAPACK kernels, as lowering a LAPACK call does: a program read back
-    from disk is never lowered, and its LAPACK calls would run unset kernels (a crash)."""
+    from disk is never lowered, and its LAPACK calls would run unset kernels (a crash).
+
+    jaxlib takes the kernels from scipy's two modules of LAPACK and BLAS pointers
+    (_LAPACK_MODULES). Imported by name they run the whole of ``scipy.linalg`` first (a
+    quarter of a second, more than loading a kept program); here they are loaded alone for
+    the set-up and then dropped from ``sys.modules``, so that a later ``import
+    scipy.linalg`` loads its package whole as usual. Where that fails (another jaxlib),
+    the kernels are set up as jax does, by lowering a LAPACK call."""
+    added = []
+    try:
+        from jaxlib.cpu import _lapack
+
+        for name in _LAPACK_MODULES:
+            if name not in sys.modules:
+                parent = importlib.util.find_spec(name.rpartition(".")[0])
+                spec = importlib.machinery.PathFinder.find_spec(name, parent.submodule_search_locations)
+                sys.modules[name] = importlib.util.module_from_spec(spec)
+                added.append(name)
+                spec.loader.exec_module(sys.modules[name])
+        _lapack.initialize()
+        return
+    except Exception:  # not this jaxlib's or scipy's layout
+        pass
+    finally:
+        for name in added:
+            del sys.modules[name]
     jax.jit(jnp.linalg.eigh).lower(np.eye(2))
 
 
