@@ -90,6 +90,30 @@ shear, with the chips' noise (``noise``, T per axis):
                            the map
     saturation_ratio       the largest |reading| over every chip, axis and load point of the
                            sweep over the chips' range (-)
+    saturation_force       the largest normal force (N) that presses no chip axis out of its
+                           range, worst (smallest) over the map and the sweep's contacts
+                           (below)
+
+``saturation_force`` presses along the sweep's largest load: a normal force F with the shear
+F (F_x, F_y) / Fn of the sweep's point of largest Fn, at each contact position of the map and
+of the sweep. Each chip axis's reading over its range (``chip_range``), c_i(F), is read by
+:meth:`SkinScene.readings_at` (the background and the other static effects included), and the
+output is the first F > 0 at which some |c_i(F)| reaches 1: the press's largest force before a
+chip saturates, even where a larger force would bring a reading back in range. At rest the
+readings hold the layer's own field (and the background), which may already lie near the
+range, and a press may lower the largest |c_i| before another axis saturates: the largest
+|reading| is not monotone in F, so the output follows each axis on its own. At a fixed contact
+radius the displacement, and so each c_i, is linear in F: c_i(F) = c_i(0) + F k_i, whose first
+crossing is F_i = (1 - sign(k_i) c_i(0)) / |k_i|. The flat punch's radius is fixed, so one
+secant through rest and the sweep's largest force is exact; the sphere's Hertz patch grows as
+F^(1/3), so k_i is taken again through the last answer (the secant through rest and it) until
+the answer moves by less than SATURATION_RTOL (at most SATURATION_STEPS times). This assumes
+that no c_i leaves and re-enters the range before the answer (each is linear in F at a given
+patch; the patch's growth bends it slowly). A last Newton step on the binding axis,
+F - (c_i(F) - (+-1)) / c_i'(F) with F and c_i'(F) held fixed, gives the answer its derivative
+by the implicit function theorem (dF = -dc_i / c_i'), so that a design can hold it as a limit.
+An axis at or past its range at rest gives 0 (``saturation_ratio`` says by how much); a press
+that saturates no axis up to SATURATION_FORCE_CAP gives the cap (its derivative 0).
 """
 
 import math
@@ -98,8 +122,10 @@ from typing import ClassVar
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
+from magdesign._numerics import safe_div
 from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
 from magdesign.fields.layer_field import finer, gauss_levels, layer_field, pattern
@@ -120,6 +146,13 @@ from magdesign.units import uT
 
 # Below this normal force (N) the contact patch keeps this force's Hertz radius (module docstring).
 CONTACT_FORCE_FLOOR = 1e-3
+# The largest force (N) saturation_force reports: a skin that no press up to it saturates
+# reports it (a kilonewton: far past the loads a linear layer models).
+SATURATION_FORCE_CAP = 1e3
+# saturation_force's secant steps end when the force moves by less than this relative step,
+# or after SATURATION_STEPS (module docstring).
+SATURATION_RTOL = 1e-6
+SATURATION_STEPS = 8
 # A uniform field of the Earth's size (T), the reference of background_force_error.
 BACKGROUND_REFERENCE = 50 * uT
 # The unknowns of a load point and their units, the order of the Jacobian's columns.
@@ -164,6 +197,19 @@ def linear_grid(size, thickness, resolution: tuple[int, int, int]) -> SpectralGr
     nx, ny, nodes = resolution
     plane = spectral_grid(size=size, thickness=thickness, cells=(nx, ny, 1))
     return band_limited_grid(plane.periods, nodes)
+
+
+def first_crossings(rest: Float[Array, " k"], slope: Float[Array, " k"]) -> Float[Array, " k"]:
+    """The force F > 0 (N) at which each range fraction rest + F slope (-, slope in 1/N)
+    first reaches +1 or -1: (1 - sign(slope) rest) / |slope|; SATURATION_FORCE_CAP where the
+    slope is 0 or the crossing lies beyond it, 0 where |rest| >= 1 (out of range at rest)."""
+    crossing = safe_div(1.0 - jnp.sign(slope) * rest, jnp.abs(slope), at_zero=SATURATION_FORCE_CAP)
+    return jnp.where(jnp.abs(rest) >= 1.0, 0.0, jnp.minimum(crossing, SATURATION_FORCE_CAP))
+
+
+def _held(tree):
+    """``tree`` with every array leaf's derivative stopped (the search's fixed point)."""
+    return jax.tree.map(lambda leaf: jax.lax.stop_gradient(leaf) if eqx.is_array(leaf) else leaf, tree)
 
 
 def _chip_pairs(chips) -> tuple[tuple[Float[Array, ""], Float[Array, ""]], ...]:
@@ -260,6 +306,7 @@ class SkinScene(AbstractScene):
         "crosstalk": "1",
         "background_force_error": "N",
         "saturation_ratio": "1",
+        "saturation_force": "N",
     }
 
     @property
@@ -425,6 +472,55 @@ class SkinScene(AbstractScene):
         shift = jnp.einsum("ij,kj->ki", bound.covariance @ weighted.T, fields)
         return bound, shift[:, 2]
 
+    def range_fractions(self, state: Float[Array, "5"]) -> Float[Array, " k"]:
+        """Every chip axis's reading (:meth:`readings_at`) over its range (-), (3 S,), under
+        one load state (x, y, Fn, F_x, F_y)."""
+        return (self.readings_at(state) / self.chip_range().limit).ravel()
+
+    def saturation_force_at(
+        self, contact: Float[Array, "2"], shear_ratio: Float[Array, "2"], start: Float[Array, ""]
+    ) -> Float[Array, ""]:
+        """The largest normal force F (N) pressing at ``contact`` (m, (2,)), with the shear
+        F ``shear_ratio`` (-, (2,)), before a chip axis leaves its range: the secant search
+        from ``start`` (N, > 0) and its last Newton step (module docstring)."""
+        held, point, ratio = _held(self), jax.lax.stop_gradient(contact), jax.lax.stop_gradient(shear_ratio)
+
+        def fractions(scene, force, at=point):
+            return scene.range_fractions(jnp.concatenate([at, force[None], force * ratio]))
+
+        rest = fractions(held, jnp.zeros(()))
+
+        def secant(carry):
+            step, force, _ = carry
+            crossing = jnp.min(first_crossings(rest, (fractions(held, force) - rest) / force))
+            return step + 1, jnp.clip(crossing, CONTACT_FORCE_FLOOR, SATURATION_FORCE_CAP), force
+
+        def moving(carry):
+            step, force, last = carry
+            return (step < SATURATION_STEPS) & (jnp.abs(force - last) > SATURATION_RTOL * force)
+
+        start = jnp.clip(jax.lax.stop_gradient(start), CONTACT_FORCE_FLOOR, SATURATION_FORCE_CAP)
+        _, force, _ = jax.lax.while_loop(moving, secant, (0, start, jnp.asarray(jnp.inf)))
+        # the binding axis at the answer, and its slope there, held fixed
+        values, slopes = jax.jvp(lambda f: fractions(held, f), (force,), (jnp.ones(()),))
+        axis = jnp.argmin(first_crossings(rest, (values - rest) / force))
+        bound = jnp.sign(values[axis])
+        newton = force - safe_div(fractions(self, force, contact)[axis] - bound, slopes[axis])
+        return jnp.where(jnp.max(jnp.abs(rest)) >= 1.0, 0.0, jnp.where(force >= SATURATION_FORCE_CAP, force, newton))
+
+    def saturation_force(self, loads: Loads) -> Float[Array, ""]:
+        """The output ``saturation_force`` (N) of a sweep ``loads``: the smallest
+        :meth:`saturation_force_at` over the map's points and the sweep's contacts, pressing
+        along the sweep's load of largest normal force (module docstring)."""
+        largest = jnp.argmax(loads.normal)
+        force = loads.normal[largest]
+        ratio = safe_div(loads.shear[largest], force)
+        contacts = jnp.concatenate([self.map_points(), loads.contact], axis=0)
+        concrete = _concrete(contacts)
+        if concrete is not None:  # the same contact pressed at several forces counts once
+            contacts = jnp.asarray(np.unique(concrete, axis=0))
+        return jnp.min(jax.lax.map(lambda point: self.saturation_force_at(point, ratio, force), contacts))
+
     def outputs(self, result):
         force = jnp.max(result.loads.normal)
         shear = result.loads.shear[jnp.argmax(result.loads.normal)]
@@ -447,4 +543,5 @@ class SkinScene(AbstractScene):
             "crosstalk": jnp.max(jnp.abs(correlation)),
             "background_force_error": jnp.max(jnp.abs(background)),
             "saturation_ratio": self.chip_range().ratio(self.transduce(result.chip_field)),
+            "saturation_force": self.saturation_force(result.loads),
         }

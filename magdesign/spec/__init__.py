@@ -9,6 +9,8 @@
   (:func:`problem_from_spec`), and solved ones written back (:func:`write_spec`);
 - :mod:`magdesign.spec.sweep`: the inputs of a sweep and their values (``--over``, ``--points``);
 - :mod:`magdesign.spec.tolerance`: the [design.tolerances] table;
+- :mod:`magdesign.spec.chips`: a skin's design over candidate chip grids, the fewest chips
+  that succeed (:func:`fewest_chips`);
 - :mod:`magdesign.spec.sizes`: the memory a spec's sizes ask for;
 - :mod:`magdesign.spec.reference`: the spec reference, rendered from the key table.
 
@@ -34,6 +36,7 @@ _READERS = {
     "problem_from_spec": "magdesign.spec.design",
     "write_spec": "magdesign.spec.design",
     "tolerance_problem_from_spec": "magdesign.spec.tolerance",
+    "fewest_chips": "magdesign.spec.chips",
 }
 
 

@@ -1,0 +1,113 @@
+"""The fewest chips: a skin's design solved over candidate chip grids, the smallest that
+succeeds.
+
+A chip count is no design variable (the solver moves continuous parameters), so
+:func:`fewest_chips` solves the spec's design once per candidate ``sensor.grid`` ([rows,
+columns], each at the spec's ``sensor.pitch`` or the pitch the design varies), in order of
+chip count, and stops at the first whose solve is successful. Each candidate keeps its
+solver's status; a grid the spec refuses (fewer chips than a contact's five unknowns need,
+:data:`~magdesign.spec.skin.SKIN_MIN_CHIPS`, or chips off the skin) keeps the refusal's
+message.
+"""
+
+import copy
+import dataclasses
+from collections.abc import Sequence
+
+from magdesign.design.report import DesignResult
+from magdesign.design.solve import solve
+from magdesign.spec.design import problem_from_spec
+from magdesign.units import SpecError
+
+
+@dataclasses.dataclass(frozen=True)
+class GridTrial:
+    """One candidate grid and what became of it.
+
+    Attributes:
+        grid: the candidate's ``sensor.grid``, (rows, columns).
+        chips: its chip count, rows x columns.
+        status: the solver's status ("successful", "infeasible_target", ...), or "refused"
+            where the spec with this grid is refused (``reason`` says why).
+        result: the solve's :class:`~magdesign.design.report.DesignResult`, None where refused.
+        reason: the refusal's one-line message, None where solved.
+    """
+
+    grid: tuple[int, int]
+    chips: int
+    status: str
+    result: DesignResult | None = None
+    reason: str | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class FewestChips:
+    """The candidates tried, in order of chip count, up to the first that succeeds.
+
+    Attributes:
+        trials: each candidate tried (:class:`GridTrial`).
+    """
+
+    trials: tuple[GridTrial, ...]
+
+    @property
+    def best(self) -> GridTrial | None:
+        """The trial with the fewest chips whose solve is successful, or None."""
+        return next((trial for trial in self.trials if trial.status == "successful"), None)
+
+    @property
+    def status(self) -> str:
+        """ "successful" where a candidate succeeds, else "no_grid_succeeded"."""
+        return "successful" if self.best is not None else "no_grid_succeeded"
+
+
+def _grid(candidate, index) -> tuple[int, int]:
+    """A candidate [rows, columns] of positive whole numbers, else a SpecError naming it."""
+    if (
+        not isinstance(candidate, Sequence)
+        or len(candidate) != 2
+        or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in candidate)
+    ):
+        raise SpecError(f"grids[{index}]: expected [rows, columns], two whole numbers of 1 or more, got {candidate!r}")
+    return int(candidate[0]), int(candidate[1])
+
+
+def fewest_chips(spec: dict, grids: Sequence[Sequence[int]], **options) -> FewestChips:
+    """Solve a skin's design (``spec``, its chips on ``sensor.grid`` at ``sensor.pitch``) for
+    each candidate grid in ``grids`` ([rows, columns] each), fewest chips first (candidates
+    of one count in the given order), until one is successful.
+
+    Args:
+        spec: a skin's design spec (the dict of a TOML file), with ``sensor.grid``.
+        grids: the candidate grids, [rows, columns] each.
+        options: passed to :func:`magdesign.design.solve` (rtol, atol, max_steps, solver).
+
+    Returns:
+        :class:`FewestChips`: every candidate tried with its status; ``best`` the first
+        successful one (None if none is), ``status`` "successful" or "no_grid_succeeded".
+        A SpecError where the spec places no chips on a grid, a candidate is not [rows,
+        columns] or the spec has an error of its own; a candidate grid the spec refuses
+        (its error names sensor.grid) is a trial with status "refused".
+    """
+    sensor = spec.get("sensor", {})
+    if "grid" not in sensor or "chips" in sensor:
+        raise SpecError("sensor.grid: fewest_chips varies the chips' grid; place the chips by sensor.grid and pitch")
+    candidates = sorted((_grid(candidate, i) for i, candidate in enumerate(grids)), key=lambda g: g[0] * g[1])
+    if not candidates:
+        raise SpecError("grids: expected at least one candidate [rows, columns]")
+    trials = []
+    for grid in candidates:
+        trial_spec = copy.deepcopy(spec)
+        trial_spec["sensor"]["grid"] = list(grid)
+        try:
+            problem, _ = problem_from_spec(trial_spec)
+        except SpecError as error:
+            if not str(error).startswith("sensor.grid"):  # the spec's own error, whatever the grid
+                raise
+            trials.append(GridTrial(grid, grid[0] * grid[1], "refused", reason=str(error)))
+            continue
+        result = solve(problem, **options)
+        trials.append(GridTrial(grid, grid[0] * grid[1], str(result.status), result=result))
+        if trials[-1].status == "successful":
+            break
+    return FewestChips(tuple(trials))
