@@ -160,7 +160,7 @@ def test_the_change_matches_an_independent_integral(load):
     reference = reference_change(CHIPS, load)
     scale = np.max(np.abs(reference))
     # the finer resolution agrees with the reference to 0.6 % of the largest change (measured:
-    # 0.40 % centred, at the centre chip's Bz, and 0.06 % sheared), and the coarser one within
+    # 0.40 % centred and 0.13 % sheared, both at the centre chip's Bz), and the coarser one within
     # its estimate (its distance to the finer one) plus that
     assert np.max(np.abs(fine - reference)) < 6e-3 * scale
     estimate = np.abs(coarse - fine)
