@@ -32,12 +32,16 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(VENV)/bin/magdesign solve --timing
 
-# the fast tier, which touches every module; test-all adds the tests marked slow
+# the fast tier, which touches every module; test-all adds the tests marked slow. Each
+# module runs on one worker, in the order tests/conftest.py gives (the longest first):
+# xdist would otherwise order the modules by their number of tests.
+XDIST := -n 2 --dist loadscope --no-loadscope-reorder
+
 test: $(STAMP)
-	$(PY) -m pytest -q -n 2 --dist loadscope -m "not slow"
+	$(PY) -m pytest -q $(XDIST) -m "not slow"
 
 test-all: $(STAMP)
-	$(PY) -m pytest -q -n 2 --dist loadscope --durations=15
+	$(PY) -m pytest -q $(XDIST) --durations=15
 
 # ruff: lint and format, as configured in pyproject.toml
 lint: $(STAMP)

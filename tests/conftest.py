@@ -34,9 +34,10 @@ def _drop_compiled_programs_before_the_mapping_limit():
     free_programs_near_mapping_limit()
 
 
-# Modules that take minutes of one worker, run first: with `-n 2 --dist loadscope` (the
-# Makefile) each module runs on one worker, so that its module fixtures (a study's run, a
-# compiled program) run once, and a long module started last would leave the other worker idle.
+# Modules that take minutes of one worker, run first: with `-n 2 --dist loadscope
+# --no-loadscope-reorder` (the Makefile) each module runs on one worker, in this order, so
+# that its module fixtures (a study's run, a compiled program) run once, and a long module
+# started last would leave the other worker idle.
 LONG_MODULES = ("tests/test_cli.py", "tests/studies/", "tests/test_docs.py", "tests/test_installed.py")
 
 
