@@ -10,7 +10,14 @@ import numpy as np
 
 from magdesign.fields.layer_field import finer
 from magdesign.scene.pose import grid_positions
-from magdesign.scene.skin_scene import FIELD_MODELS, INDENTERS, SkinMagnets, SkinScene, default_resolution
+from magdesign.scene.skin_scene import (
+    FIELD_MODELS,
+    INDENTERS,
+    NODES_PER_PERIOD,
+    SkinMagnets,
+    SkinScene,
+    default_resolution,
+)
 from magdesign.scene.solids import check_apart, solid
 from magdesign.spec.checks import PlausibilityWarning
 from magdesign.spec.scene import (
@@ -173,6 +180,30 @@ def _skin_period(magnet, direction):
     return period, direction
 
 
+def _check_pattern_nodes(key, counts, size, period):
+    """SpecError naming magnet.<key> where its nodes (or cells) along x sample the pattern of
+    ``period`` (m) fewer than twice a period (the pattern aliases: at two a period every node
+    may fall on a zero of J_z); a PlausibilityWarning below NODES_PER_PERIOD a period, the
+    default resolution's. ``counts`` None: the default resolution, which resolves the period."""
+    if counts is None:
+        return
+    per_period = counts[0] * period / size[0]
+    if per_period <= 2.0:
+        raise SpecError(
+            f"magnet.{key}: {counts[0]} along x over the {size[0] * 1e3:g} mm layer is {per_period:.3g} per "
+            f"{period * 1e3:g} mm period (magnet.period), too few to carry the pattern; expected more than "
+            f"{math.floor(2.0 * size[0] / period)} along x"
+        )
+    if per_period < NODES_PER_PERIOD:
+        warnings.warn(
+            f"magnet.{key}: {counts[0]} along x is {per_period:.3g} per {period * 1e3:g} mm period "
+            f"(magnet.period); the default puts {NODES_PER_PERIOD} in a period, and the field's error "
+            "grows as the spacing squared",
+            PlausibilityWarning,
+            stacklevel=4,
+        )
+
+
 def _skin_soft_parts(spec, size, thickness, chips, depth):
     """[[soft]] parts near a skin: fixed (the load moves the layer only), apart from the
     layer and from the chips' sensing points; SpecError naming the part otherwise."""
@@ -226,6 +257,8 @@ def skin_scene(spec, fidelity):
     if given and field != "linear":
         raise SpecError('magnet.resolution: only the linear field (magnet.field = "linear") has nodes')
     resolution = resolution if given else None
+    if period is not None:
+        _check_pattern_nodes(*(("cells", cells) if field == "cells" else ("resolution", resolution)), size, period)
     magnet.done()
     indenter = Table(spec, "indenter")
     radius = indenter.quantity("radius", "m")

@@ -9,6 +9,7 @@ from scene_helpers import example
 
 from magdesign.fields.film import film
 from magdesign.scene import scene_from_spec
+from magdesign.spec.checks import PlausibilityWarning
 from magdesign.units import SpecError, mm
 
 
@@ -40,11 +41,20 @@ def magnet(**keys):
         (magnet(period="-2 mm"), r"^magnet.period: -0.002 m is not physical"),
         (magnet(direction=[0, 1, 0]), r"^magnet.direction: .*y component"),
         (magnet(field="cells", resolution=[8, 8, 2]), r"^magnet.resolution: "),
+        # 15 nodes over 30 mm: 2 mm apart, two per 4 mm period, each node may sit on a zero of J_z
+        (magnet(resolution=[15, 30, 6]), r"^magnet.resolution: 15 along x .* too few .*; expected more than 15 along x"),
+        (magnet(field="cells", cells=[7, 16, 2]), r"^magnet.cells: 7 along x .* too few"),
     ],
 )
 def test_bad_period_names_the_key(spec, expected):
     with pytest.raises(SpecError, match=expected):
         scene_from_spec(spec)
+
+
+def test_a_coarse_pattern_resolution_warns():
+    # 40 nodes over 30 mm: 5.3 per 4 mm period, under the default's 8
+    with pytest.warns(PlausibilityWarning, match=r"^magnet.resolution: 40 along x is 5.33 per 4 mm period"):
+        scene_from_spec(magnet(resolution=[40, 40, 6]))
 
 
 def test_a_period_with_discrete_magnets_is_refused():
