@@ -320,7 +320,7 @@ def _keys():
         Key(
             "magnet.direction",
             "quantities",
-            "the polarisation's direction (x, y, z), normalised (absent: the axis; a skin's: through its thickness)",
+            "the polarisation's direction (x, y, z), normalised (absent: the axis; a skin's: through its thickness, [0, 0, 1], or with magnet.period [0, 0, -1] at x = 0)",
             "1",
             None,
             length=3,

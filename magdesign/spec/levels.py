@@ -202,8 +202,8 @@ LADDERS = (
         _soft_rank,
         lambda spec: f"{_soft_rank(spec)} cells",
     ),
-    # A skin's uniformly magnetised layer: its linear field's resolution (the rigid cells and
-    # an eFlesh-like skin's magnets have no ladder).
+    # A skin's magnetised layer (uniform or patterned): its linear field's resolution (the rigid
+    # cells and an eFlesh-like skin's magnets have no ladder).
     Ladder(
         "skin",
         _skin_applies,
