@@ -75,8 +75,8 @@ The mechanics' "displacement" of this scene is the load itself: each load point'
 
 Outputs (:meth:`SkinScene.outputs`), from the Jacobian of every chip's reading with respect
 to (x, y, Fn, F_x, F_y) on a map of contact positions (a ``map_grid`` over the chips'
-bounding box, :meth:`SkinScene.map_points`) at the sweep's largest normal force and its
-shear, with the chips' noise (``noise``, T per axis):
+bounding box or the stated ``map_size``, :meth:`SkinScene.map_points`) at the sweep's
+largest normal force and its shear, with the chips' noise (``noise``, T per axis):
 
     localisation_worst / localisation_median   the Cramer-Rao bound of the contact position,
                            sqrt(var x + var y) (m), worst and median over the map
@@ -240,7 +240,8 @@ class SkinScene(AbstractScene):
     "cells" (module docstring); ``resolution`` (static): the linear field's nodes (n_x, n_y,
     Gauss nodes), by default :func:`default_resolution`'s; ``cells`` (static): the layer's
     cells (n_x, n_y, n_z) of the "cells" field; ``map_grid`` (static): the outputs' contact
-    positions (n_x, n_y); ``spectral`` (static): the field's wavevector lattice (the linear
+    positions (n_x, n_y), over the chips' bounding box or ``map_size`` (static, m, (L_x,
+    L_y) centred on the origin); ``spectral`` (static): the field's wavevector lattice (the linear
     field's or the cells'), by default chosen from the concrete size and thickness at
     construction (module docstring). ``indenter`` (static): "sphere" or "flat" (a rigid
     flat punch), of radius ``sphere_radius`` (m). ``chips``: each chip's (x, y)
@@ -266,6 +267,7 @@ class SkinScene(AbstractScene):
     direction: tuple[float, float, float] = eqx.field(static=True, default=(0.0, 0.0, 1.0))
     cells: tuple[int, int, int] = eqx.field(static=True, default=(16, 16, 8))
     map_grid: tuple[int, int] = eqx.field(static=True, default=(5, 5))
+    map_size: tuple[float, float] | None = eqx.field(static=True, default=None)
     spectral: SpectralGrid | None = eqx.field(static=True, default=None)
     pitch: Float[Array, ""] | None = None
     magnets: SkinMagnets | None = None
@@ -443,10 +445,15 @@ class SkinScene(AbstractScene):
         return field
 
     def map_points(self) -> Float[Array, "m 2"]:
-        """The outputs' contact positions (M, 2) (m): a ``map_grid`` over the chips' bounding
-        box, corners included; along an axis of one point, the box's middle."""
-        chips = self.chip_positions()
-        low, high = jnp.min(chips, axis=0), jnp.max(chips, axis=0)
+        """The outputs' contact positions (M, 2) (m): a ``map_grid`` over the ``map_size``
+        area centred on the skin's centre (the origin), or where it is None over the chips'
+        bounding box, corners included; along an axis of one point, the area's middle."""
+        if self.map_size is None:
+            chips = self.chip_positions()
+            low, high = jnp.min(chips, axis=0), jnp.max(chips, axis=0)
+        else:
+            high = jnp.asarray(self.map_size) / 2
+            low = -high
         xs, ys = (
             jnp.linspace(low[i], high[i], n) if n > 1 else ((low[i] + high[i]) / 2)[None]
             for i, n in enumerate(self.map_grid)

@@ -585,8 +585,19 @@ def _keys():
         Key(
             "sensor.map_grid",
             "integers",
-            "a skin's outputs: contact positions [along x, along y] over the chips' bounding box",
+            "a skin's outputs: contact positions [along x, along y] over the chips' bounding box or sensor.map_size",
             default=[5, 5],
+            length=2,
+        ),
+        Key(
+            "sensor.map_size",
+            "quantities",
+            "the area [along x, along y] of a skin's outputs' map, centred on the skin's centre (absent: the chips' "
+            "bounding box)",
+            "m",
+            None,
+            POSITIVE,
+            LENGTH,
             length=2,
         ),
         Key(

@@ -101,11 +101,18 @@ def _skin_rank(spec):
 def _skin_levels(spec):
     """The linear field's resolutions, each the :func:`~magdesign.fields.layer_field.finer`
     of the one before: half the default's nodes across (at least 2) and FINER_NODES fewer
-    Gauss nodes (at least 1), the default, and its finer one."""
+    Gauss nodes (at least 1), the default, and its finer one; for a resolution the spec
+    states off these, that resolution and its finer one. Below the top a level's neighbour is
+    then its finer one (the pair :meth:`~magdesign.scene.skin_scene.SkinScene.field_error`
+    compares, SKIN_FINER_FACTOR's), never a level barely finer, whose move says little."""
     default = _skin_default(spec)
     nx, ny, nodes = default
     coarse = (max(2, -(-nx // 2)), max(2, -(-ny // 2)), max(1, nodes - FINER_NODES))
-    return tuple({"magnet.resolution": list(resolution)} for resolution in (coarse, default, finer(default)))
+    resolutions = (coarse, default, finer(default))
+    given = _skin_resolution(spec)
+    if given not in resolutions:
+        resolutions = (given, finer(given))
+    return tuple({"magnet.resolution": list(resolution)} for resolution in resolutions)
 
 
 # A skin's outputs converge at an order of 1.5 to 2.5 in the linear field's node spacing

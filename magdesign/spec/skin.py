@@ -75,7 +75,8 @@ def check_skin_loads(scene, loads):
             "contact has no position to find; expected a press above 0 N"
         )
     thickness = float(scene.thickness)
-    for key, points in (("load.contact", loads.contact), ("sensor.map_grid", scene.map_points())):
+    map_key = "sensor.map_grid" if scene.map_size is None else "sensor.map_size"
+    for key, points in (("load.contact", loads.contact), (map_key, scene.map_points())):
         margin = float(np.min(size / 2 - np.abs(np.asarray(points))))
         if margin < thickness:
             warnings.warn(
@@ -271,6 +272,7 @@ def skin_scene(spec, fidelity):
     chips = offsets if pitch is None else offsets * pitch
     depth = sensor.quantity("depth", "m")
     map_grid = _counts(sensor, "map_grid", [5, 5], "[along x, along y]")
+    map_size = sensor.quantities("map_size", "m", length=2, default=None)
     sensor.done()
     if chips.shape[0] < SKIN_MIN_CHIPS:
         raise SpecError(
@@ -278,6 +280,11 @@ def skin_scene(spec, fidelity):
             f"3 forces (5 unknowns); expected at least {SKIN_MIN_CHIPS} chips"
         )
     check_on_skin((chips_key, chips_key), chips, size)
+    if map_size is not None and np.any(np.asarray(map_size) > np.asarray(size) * (1.0 + CONTACT_RTOL)):
+        raise SpecError(
+            f"sensor.map_size: a {map_size[0] * 1e3:g} x {map_size[1] * 1e3:g} mm map centred on the skin reaches "
+            f"off the {size[0] * 1e3:g} x {size[1] * 1e3:g} mm skin (mechanics.size); expected at most its sides"
+        )
     if not depth > 0.0:
         raise SpecError(
             f"sensor.depth: chips {depth * 1e3:g} mm below the board's surface would sit in the skin; expected "
@@ -315,6 +322,7 @@ def skin_scene(spec, fidelity):
         direction=(0.0, 0.0, 1.0) if direction is None else tuple(float(v) for v in direction),
         cells=cells,
         map_grid=map_grid,
+        map_size=None if map_size is None else tuple(map_size),
         magnets=magnets,
         field=field,
         resolution=resolution,
