@@ -42,7 +42,10 @@ def magnet(**keys):
         (magnet(direction=[0, 1, 0]), r"^magnet.direction: .*y component"),
         (magnet(field="cells", resolution=[8, 8, 2]), r"^magnet.resolution: "),
         # 15 nodes over 30 mm: 2 mm apart, two per 4 mm period, each node may sit on a zero of J_z
-        (magnet(resolution=[15, 30, 6]), r"^magnet.resolution: 15 along x .* too few .*; expected more than 15 along x"),
+        (
+            magnet(resolution=[15, 30, 6]),
+            r"^magnet.resolution: 15 along x .* too few .*; expected more than 15 along x",
+        ),
         (magnet(field="cells", cells=[7, 16, 2]), r"^magnet.cells: 7 along x .* too few"),
     ],
 )
