@@ -267,6 +267,36 @@ def filter_jit(fn, name: str):
     return call
 
 
+_REMEMBERED = {}  # (folder, name, structure) -> the answer
+
+
+def remembered(name: str, structure: str, find):
+    """``find()``, a fact about a program found from its trace (a small picklable value
+    that depends on nothing but ``structure``, a text, and :func:`versions`), kept on disk
+    beside the exported programs, so that a later process reads it instead of tracing
+    again; found afresh where keeping is off or ``structure`` names an object's address
+    (no stable text), and kept again where the entry is missing, damaged or for another
+    text."""
+    folder = directory()
+    if folder is None or _ADDRESS.search(structure):
+        return find()
+    memo = (folder, name, structure)
+    if memo not in _REMEMBERED:
+        text = f"{name}\n{structure}\n{versions()}"
+        path = folder / f"{name}-{hashlib.sha256(text.encode()).hexdigest()[:32]}.answer"
+        try:
+            entry = pickle.loads(path.read_bytes())
+            found = entry["text"] == text
+        except Exception:  # missing or damaged: found again
+            found = False
+        if found:
+            _REMEMBERED[memo] = entry["answer"]
+        else:
+            _REMEMBERED[memo] = find()
+            _keep(path, {"text": text, "answer": _REMEMBERED[memo]})
+    return _REMEMBERED[memo]
+
+
 def _aval(leaf, batch):
     """(shape, dtype name) of an argument leaf, the leading axis "batch" where it is one."""
     shape = tuple(np.shape(leaf))

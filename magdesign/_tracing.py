@@ -7,6 +7,7 @@ import gc
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax.extend.core import ClosedJaxpr, Jaxpr
 
 _errors = {"as_nan": False}  # set by errors_as_nan, read by checked when traced
@@ -110,6 +111,38 @@ def free_programs_near_mapping_limit() -> bool:
         clear()
     jax.clear_caches()
     return True
+
+
+def on_device(value):
+    """``value`` (a Python number, nested lists of numbers, a numpy or jax array) as a
+    strongly typed jax array (float64 for a float) on the default device, made without a
+    program: ``jnp.asarray`` of a Python number runs a small conversion program (to a weak
+    type) that each new process compiles again, and the first such compile sets up XLA's
+    pipeline, about a tenth of a second of a command's second run. A jax array (a tracer
+    too) is returned as it is."""
+    if isinstance(value, jax.Array):
+        return value
+    return jax.device_put(np.asarray(value))
+
+
+def random_key(seed: int):
+    """``jax.random.key(seed)`` made without a program (see :func:`on_device`): under JAX's
+    default generator, threefry2x32, a key's data is the seed's high and low 32 bits, as
+    ``jax.random.key`` makes it; a negative seed, one of 2**63 or more, or another default
+    generator is made by ``jax.random.key``."""
+    if jax.config.jax_default_prng_impl != "threefry2x32" or not 0 <= seed < 2**63:
+        return jax.random.key(seed)
+    return jax.random.wrap_key_data(np.array([seed >> 32, seed & 0xFFFFFFFF], np.uint32))
+
+
+def strongly_typed(leaf):
+    """An inexact array ``leaf`` as a strongly typed jax array of its dtype, as
+    ``jnp.asarray(leaf, dtype=leaf.dtype)``, without a program (see :func:`on_device`): a
+    weakly typed or numpy leaf is copied through the host, a strongly typed jax array (a
+    tracer too) is returned as it is."""
+    if isinstance(leaf, jax.Array) and (isinstance(leaf, jax.core.Tracer) or not leaf.weak_type):
+        return leaf
+    return jax.device_put(np.asarray(leaf, dtype=leaf.dtype))
 
 
 @contextlib.contextmanager

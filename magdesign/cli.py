@@ -40,10 +40,12 @@ import warnings
 from pathlib import Path
 
 import jax
+import numpy as np
 
 from magdesign import _export, _progress
 from magdesign._cache import cache_directory, export_directory, use_compilation_cache
 from magdesign._progress import stage, wrote
+from magdesign._tracing import random_key
 from magdesign.design import solve as solve_problem
 from magdesign.design import sweep as sweep_problem
 from magdesign.design.report import format_quantity
@@ -512,7 +514,7 @@ def run_simulate(args):
     loads = loads_from_spec(spec)
     levels = fidelity_levels(spec)
     stage(f"simulating the load sweep{' at ' + levels if levels else ''} ({FIRST_CALL})")
-    result, outputs = _simulate(scene, loads, key=jax.random.key(0))
+    result, outputs = _simulate(scene, loads, key=random_key(0))
     warn_if_clipping(scene, result)
     order = list(scene.output_units)  # the scene's order (a program's dict comes back sorted)
     ranked = sorted(outputs, key=lambda name: order.index(name) if name in order else len(order))
@@ -541,7 +543,7 @@ def run_simulate(args):
         )
         units = {name: unit.removeprefix("1") or None for name, unit in scene.output_units.items()}
         print(estimates_text(spec, estimates, values, units))
-    return 0 if bool(result.converged.all()) else EXIT_NOT_SOLVED
+    return 0 if bool(np.all(np.asarray(result.converged))) else EXIT_NOT_SOLVED
 
 
 def run_tolerance(args):

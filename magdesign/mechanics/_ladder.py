@@ -18,7 +18,9 @@ value is estimated from the level above it:
 |f_0 - f| <= |f_0 - f_1| + |f_1 - f| <= (1 + ESTIMATE_FACTOR) |f_1 - f_0|.
 """
 
+import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import lax
 
 # (elements through the wall, elements along the meridian), coarsest first
@@ -44,9 +46,11 @@ def companion(level):
 def bound(value, other, other_is_finer):
     """Estimated absolute error of ``value`` from ``other``, the value one level finer
     (``other_is_finer``) or one level coarser (the module docstring's rule), elementwise, in
-    the units of the value."""
+    the units of the value. Numbers or numpy arrays are bounded with numpy (a command's
+    estimate, on the host: no program to compile), jax arrays with jax."""
     factor = 1 + ESTIMATE_FACTOR if other_is_finer else ESTIMATE_FACTOR
-    return jnp.maximum(factor * jnp.abs(value - other), ESTIMATE_FLOOR * jnp.abs(value))
+    xp = jnp if isinstance(value, jax.Array) or isinstance(other, jax.Array) else np
+    return xp.maximum(factor * xp.abs(value - other), ESTIMATE_FLOOR * xp.abs(value))
 
 
 def estimate(value, other, level, usable):

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float, PRNGKeyArray
 
+from magdesign._tracing import on_device
 from magdesign.scene.effects import AbstractEffect, judged_saturation
 from magdesign.scene.loads import Loads
 from magdesign.transducers import to_chip
@@ -147,8 +148,16 @@ def with_parameters(scene: AbstractScene, values: Mapping[str, ArrayLike]) -> Ab
         return scene
     names = list(values)
     getters = [paths[name] for name in names]
-    replacements = [jnp.asarray(values[name], dtype=jnp.result_type(float)) for name in names]
+    replacements = [_float_array(values[name]) for name in names]
     return eqx.tree_at(lambda s: [get(s) for get in getters], scene, replacements)
+
+
+def _float_array(value):
+    """``value`` as a float64 jax array (strongly typed); a number or numpy array without a
+    program to compile (:func:`magdesign._tracing.on_device`)."""
+    if isinstance(value, jax.Array):  # a tracer too
+        return jnp.asarray(value, dtype=jnp.result_type(float))
+    return on_device(np.asarray(value, dtype=jnp.result_type(float)))
 
 
 def apply_source_effects(scene: AbstractScene, effects) -> AbstractScene:
@@ -281,7 +290,10 @@ def saturation_ratio(scene: AbstractScene, result: SimulationResult) -> float | 
     transducer's reading of ``result.chip_field``), the range :meth:`AbstractScene.chip_range`'s;
     None where the scene knows no range. Above 1 the chip clips."""
     judged = scene.chip_range()
-    return None if judged is None else float(judged.ratio(scene.transduce(result.chip_field)))
+    if judged is None:
+        return None
+    # on the host: numpy copies of the range and the readings, no program to compile
+    return float(jax.tree.map(np.asarray, judged).ratio(np.asarray(scene.transduce(result.chip_field))))
 
 
 def warn_if_clipping(scene: AbstractScene, result: SimulationResult) -> None:

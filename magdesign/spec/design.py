@@ -356,7 +356,7 @@ def _range_guards(scene, limits):
         return []
     field_max = next((limit for limit in limits if limit.output == "field_max" and limit.upper is not None), None)
     reads_field = isinstance(scene, MagnetScene) and scene.reading_unit == "T"
-    if reads_field and field_max is not None and float(field_max.upper) <= float(np.min(judged.limit)):
+    if reads_field and field_max is not None and float(field_max.upper) <= float(np.min(np.asarray(judged.limit))):
         return []
     return [Limit("saturation_ratio", upper=1.0)]
 

@@ -19,8 +19,6 @@ import math
 from collections.abc import Callable, Mapping
 from typing import NamedTuple
 
-import jax.numpy as jnp
-
 from magdesign import _export
 from magdesign._numerics import ROUNDING_SPREAD
 from magdesign._progress import stage
@@ -308,7 +306,7 @@ def outputs_at(spec: dict, values: Mapping[str, float] | None = None) -> dict[st
     parameters ``values`` ({name: SI value}) set (:func:`magdesign.scene.outputs`)."""
     scene = scene_from_spec(spec)
     if values:
-        scene = with_parameters(scene, {name: jnp.asarray(value) for name, value in values.items()})
+        scene = with_parameters(scene, dict(values))  # float64 arrays, made there
     return {name: float(value) for name, value in _evaluate(scene, loads_from_spec(spec)).items()}
 
 

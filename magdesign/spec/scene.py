@@ -15,9 +15,9 @@ import math
 
 import equinox as eqx
 import jax
-import jax.numpy as jnp
 import numpy as np
 
+from magdesign._tracing import on_device, strongly_typed
 from magdesign.fields.cylinder import FIDELITIES as CYLINDER_FIDELITIES
 from magdesign.fields.soft import SIZE_LENGTHS, size_keywords, soft_body
 from magdesign.mechanics import LinearElastic, MooneyRivlin, NeoHookean, time_constant_from_pole
@@ -58,11 +58,11 @@ NDFEB_DRIFT = -0.12e-2  # 1/K
 def _material(table):
     name = table.choice("material", ("mooney_rivlin", "neo_hookean", "linear"))
     if name == "mooney_rivlin":
-        return MooneyRivlin(c10=jnp.asarray(table.quantity("c10", "Pa")), c01=jnp.asarray(table.quantity("c01", "Pa")))
+        return MooneyRivlin(c10=on_device(table.quantity("c10", "Pa")), c01=on_device(table.quantity("c01", "Pa")))
     if name == "neo_hookean":
         return NeoHookean(
-            mu=jnp.asarray(table.quantity("shear_modulus", "Pa")),
-            bulk=jnp.asarray(table.quantity("bulk_modulus", "Pa")),
+            mu=on_device(table.quantity("shear_modulus", "Pa")),
+            bulk=on_device(table.quantity("bulk_modulus", "Pa")),
         )
     youngs, poisson = table.quantity("youngs_modulus", "Pa"), table.quantity("poisson_ratio", "1")
     if poisson >= 0.5:
@@ -71,7 +71,7 @@ def _material(table):
             "modulus, no volume change under pressure); expected a value below 0.5, e.g. 0.49 (a skin's bonded "
             "layer takes 0.5 exactly)"
         )
-    return LinearElastic(E=jnp.asarray(youngs), nu=jnp.asarray(poisson))
+    return LinearElastic(E=on_device(youngs), nu=on_device(poisson))
 
 
 def check_wall(thickness, outer_radius, key="mechanics.thickness"):
@@ -94,7 +94,9 @@ def check_carried(gap, height, mechanics, key="geometry.gap"):
     tall) touches the part that carries it (to :data:`CONTACT_RTOL`): on or in a layer
     (0 <= gap <= its thickness: not below the board the layer lies on), or at a dome's apex
     (its near face at or below the outer apex, its far face at or above the inner apex)."""
-    top, bottom = float(mechanics.top()), float(mechanics.bottom())  # the guards' embed and reach
+    # the guards' embed and reach, from a numpy copy of the mechanics (no program to compile)
+    host = jax.tree.map(np.asarray, mechanics)
+    top, bottom = float(host.top()), float(host.bottom())
     if isinstance(mechanics, Layer):
         if gap < -top * CONTACT_RTOL:
             raise SpecError(
@@ -169,8 +171,8 @@ def _mechanics(spec, fidelity, models=("dome", "layer")):
         outer_radius, thickness = table.quantity("outer_radius", "m"), table.quantity("thickness", "m")
         check_wall(thickness, outer_radius)
         mechanics = Dome(
-            outer_radius=jnp.asarray(outer_radius),
-            thickness=jnp.asarray(thickness),
+            outer_radius=on_device(outer_radius),
+            thickness=on_device(thickness),
             material=_material(table),
             fidelity=table.choice("fidelity", levels, default="reissner"),
             base=table.choice("base", DOME_BASES, default="bonded"),
@@ -179,8 +181,8 @@ def _mechanics(spec, fidelity, models=("dome", "layer")):
     else:
         levels = LAYER_FIDELITIES
         mechanics = Layer(
-            thickness=jnp.asarray(table.quantity("thickness", "m")),
-            contact_area=jnp.asarray(table.quantity("contact_area", "m^2")),
+            thickness=on_device(table.quantity("thickness", "m")),
+            contact_area=on_device(table.quantity("contact_area", "m^2")),
             material=_material(table),
             fidelity=table.choice("fidelity", levels, default="hooke"),
         )
@@ -211,7 +213,7 @@ def _sensor_layout(table):
     if orientation == "radial":
         # sensitive axis a along the outward radius: Rz(gamma) maps (cos phi, sin phi) to a
         angles[:, 2] = -np.arctan2(positions[:, 1], positions[:, 0])
-    return jnp.asarray(positions), jnp.asarray(angles)
+    return on_device(positions), on_device(angles)
 
 
 def _grid(table):
@@ -236,10 +238,10 @@ def _effects(spec, reading_unit, *, saturation, lsb, noise):
             raise SpecError(f"scene.effects: {name!r} listed twice")
 
     def scalar(key, unit, default):
-        return jnp.asarray(table.quantity(key, unit, default=default))
+        return on_device(table.quantity(key, unit, default=default))
 
     def vector(key, unit, default):
-        return jnp.asarray(table.quantities(key, unit, length=len(default), default=default))
+        return on_device(table.quantities(key, unit, length=len(default), default=default))
 
     build = {
         "temperature_drift": lambda: fx.TemperatureDrift(
@@ -280,7 +282,7 @@ def _hall_effects(spec, hall):
 def _optional_vector(table, key, unit):
     """A (3,) array from a list of 3 quantities, or None when the key is absent."""
     value = table.quantities(key, unit, length=3, default=None)
-    return None if value is None else jnp.asarray(value)
+    return None if value is None else on_device(value)
 
 
 def _posed_tables(raw, key, moves):
@@ -293,8 +295,8 @@ def _posed_tables(raw, key, moves):
         name = f"{key}[{index}]"
         table = Table({name: item}, name)
         flag = table.flag("moves", moves)
-        centre = jnp.asarray(table.quantities("position", "m", length=3))
-        angles = jnp.asarray(table.quantities("rotation", "rad", length=3, default=[0.0, 0.0, 0.0]))
+        centre = on_device(table.quantities("position", "m", length=3))
+        angles = on_device(table.quantities("rotation", "rad", length=3, default=[0.0, 0.0, 0.0]))
         yield name, table, centre, angles, flag
         table.done()
 
@@ -303,9 +305,9 @@ def _extra_magnets(magnet):
     """[[magnet.extra]]: further cylinders, each at its centre (scene frame) and rotation."""
     return tuple(
         Magnet(
-            radius=jnp.asarray(table.quantity("radius", "m")),
-            height=jnp.asarray(table.quantity("height", "m")),
-            polarization=jnp.asarray(table.quantities("polarization", "T", length=3)),
+            radius=on_device(table.quantity("radius", "m")),
+            height=on_device(table.quantity("height", "m")),
+            polarization=on_device(table.quantities("polarization", "T", length=3)),
             centre=centre,
             angles=angles,
             moves=moves,
@@ -335,7 +337,7 @@ def _saturation(table, name, permeability):
     saturation = table.quantity("saturation", "T", default=None)
     if saturation is not None and permeability <= 1.0:
         raise SpecError(f"{name}.saturation: a saturating body needs {name}.permeability > 1, got {permeability:g}")
-    return None if saturation is None else jnp.asarray(saturation)
+    return None if saturation is None else on_device(saturation)
 
 
 def _soft_parts(spec):
@@ -351,8 +353,8 @@ def _soft_parts(spec):
         grid = _soft_grid(f"{name}.cells", shape, size, table.integer("cells", default=SOFT_CELLS), permeability)
         parts.append(
             SoftPart(
-                size=tuple(jnp.asarray(v) for v in size),
-                permeability=jnp.asarray(permeability),
+                size=tuple(on_device(v) for v in size),
+                permeability=on_device(permeability),
                 centre=tuple(centre),
                 angles=angles,
                 shape=shape,
@@ -369,10 +371,10 @@ def _direction(magnet):
     direction = _optional_vector(magnet, "direction", "1")
     if direction is None:
         return None
-    norm = float(jnp.linalg.norm(direction))
+    norm = float(np.linalg.norm(direction))
     if norm == 0.0:
         raise SpecError(f"{magnet.name}.direction: expected a nonzero vector [x, y, z], got zeros")
-    return direction / norm
+    return on_device(np.asarray(direction) / norm)
 
 
 def _cylinder_scene(spec, fidelity):
@@ -417,7 +419,7 @@ def _cylinder_scene(spec, fidelity):
             valve = _PRESETS[sensor.choice("preset", ("AA003-02",))]()
         amplification = sensor.quantity("amplification", "1", default=1.0)
         differential = model == "gmr"
-        transducer = SpinValveReadout(valve, jnp.asarray(amplification), differential)
+        transducer = SpinValveReadout(valve, on_device(amplification), differential)
         positions, angles = _sensor_layout(sensor)
         sensor.done()
         effects = _effects(
@@ -449,21 +451,21 @@ def _cylinder_scene(spec, fidelity):
     if "inductors" in spec:
         table = Table(spec, "inductors")
         inductors = Inductors(
-            positions=jnp.asarray(table.points("positions")),
-            area=jnp.asarray(table.quantity("area", "m^2")),
-            turns=jnp.asarray(table.quantity("turns", "1")),
-            amplification=jnp.asarray(table.quantity("amplification", "1", default=1.0)),
-            noise=jnp.asarray(table.quantity("noise", "V", default=0.0)),
+            positions=on_device(table.points("positions")),
+            area=on_device(table.quantity("area", "m^2")),
+            turns=on_device(table.quantity("turns", "1")),
+            amplification=on_device(table.quantity("amplification", "1", default=1.0)),
+            noise=on_device(table.quantity("noise", "V", default=0.0)),
             window=table.integer("window", default=20, minimum=2),
         )
         table.done()
         sensors.append(("inductors.positions", inductors.positions))
     check_apart(sensors, solids)
     return MagnetScene(
-        radius=jnp.asarray(radius),
-        height=jnp.asarray(height),
-        remanence=jnp.asarray(remanence),
-        gap=jnp.asarray(gap),
+        radius=on_device(radius),
+        height=on_device(height),
+        remanence=on_device(remanence),
+        gap=on_device(gap),
         mechanics=mechanics,
         sensor_positions=positions,
         sensor_angles=angles,
@@ -494,11 +496,11 @@ def _film_scene(spec, fidelity):
     pitch = sensor.quantity("pitch", "m", default=0.0)
     sensor.done()
     return FilmScene(
-        period=jnp.asarray(period),
-        film_thickness=jnp.asarray(thickness),
-        magnetization=jnp.asarray(magnetization),
+        period=on_device(period),
+        film_thickness=on_device(thickness),
+        magnetization=on_device(magnetization),
         layer=layer,
-        pitch=jnp.asarray(pitch),
+        pitch=on_device(pitch),
         hall=hall,
         effects=_hall_effects(spec, hall),
         grid=grid,
@@ -537,13 +539,13 @@ def _pole_scene(spec, fidelity):
     level = pole.choice("fidelity", ("reduced", "moments"), default="reduced")
     demag = permeability = rod_cells = saturation = None
     if level == "reduced":
-        demag = jnp.asarray(pole.quantity("demagnetizing_factor", "1"))
+        demag = on_device(pole.quantity("demagnetizing_factor", "1"))
     else:
         permeability = pole.quantity("permeability", "1", default=NIFE_PERMEABILITY)
         saturation = _saturation(pole, "pole", permeability)
         cells = pole.integer("cells", default=POLE_CELLS)
         rod_cells = _soft_grid("pole.cells", "cylinder", [diameter, length], cells, permeability)
-        permeability = jnp.asarray(permeability)
+        permeability = on_device(permeability)
     pole.done()
     mechanics = Table(spec, "mechanics")
     mechanics.choice("model", ("tilt",))
@@ -566,22 +568,22 @@ def _pole_scene(spec, fidelity):
         ],
     )
     return PoleScene(
-        plate_radius=jnp.asarray(radius),
-        plate_thickness=jnp.asarray(height),
-        remanence=jnp.asarray(remanence),
-        gap=jnp.asarray(gap),
-        ball_radius=jnp.asarray(ball_radius),
-        pole_diameter=jnp.asarray(diameter),
-        pole_length=jnp.asarray(length),
+        plate_radius=on_device(radius),
+        plate_thickness=on_device(height),
+        remanence=on_device(remanence),
+        gap=on_device(gap),
+        ball_radius=on_device(ball_radius),
+        pole_diameter=on_device(diameter),
+        pole_length=on_device(length),
         demagnetizing_factor=demag,
         permeability=permeability,
         saturation=saturation,
         fidelity=level,
         rod_cells=rod_cells,
-        spring=jnp.asarray(spring),
-        sensor_offset=jnp.asarray(offset),
-        sensor_height=jnp.asarray(sensor_height),
-        transducer=SpinValveReadout(valve, jnp.asarray(1.0), True),
+        spring=on_device(spring),
+        sensor_offset=on_device(offset),
+        sensor_height=on_device(sensor_height),
+        transducer=SpinValveReadout(valve, on_device(1.0), True),
         effects=_effects(
             spec, "V", saturation=ADC_FULL_SCALE, lsb=ADC_FULL_SCALE / 2 ** (ADC_BITS - 1), noise=ADC_NOISE
         ),
@@ -665,4 +667,4 @@ def scene_from_spec(spec: dict, *, fidelity: str | None = None):
         raise SpecError(f"load.points: {needs_series[0]} needs a time series of at least 2 load points, got {points}")
     # strongly typed leaves, as with_parameters makes them: a jitted function of the scene
     # then compiles once for the spec's scene and for any copy with new parameter values
-    return jax.tree.map(lambda leaf: jnp.asarray(leaf, dtype=leaf.dtype) if eqx.is_inexact_array(leaf) else leaf, scene)
+    return jax.tree.map(lambda leaf: strongly_typed(leaf) if eqx.is_inexact_array(leaf) else leaf, scene)

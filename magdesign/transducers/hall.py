@@ -14,9 +14,12 @@ Inputs and readings are flux densities in tesla, shape (..., 3) (x, y, z of the 
 """
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float, PRNGKeyArray
 
+from magdesign._tracing import on_device
 from magdesign._validation import check_nonnegative, check_positive
 from magdesign.transducers.signal import add_noise, quantise, saturate, soft_clip
 from magdesign.units import mT, uT
@@ -50,7 +53,9 @@ def apply_gain_offset(
 
 
 def _per_axis(value):
-    return jnp.broadcast_to(jnp.asarray(value, dtype=float), (3,))
+    if isinstance(value, jax.Array):  # a tracer too
+        return jnp.broadcast_to(jnp.asarray(value, dtype=float), (3,))
+    return on_device(np.broadcast_to(np.asarray(value, dtype=np.float64), (3,)))  # no program to compile
 
 
 class Hall3D(eqx.Module):

@@ -15,6 +15,7 @@ from jax.experimental import multihost_utils
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 from tqdm import tqdm
 
+from magdesign import _export
 from magdesign._progress import stage
 from magdesign._tracing import errors_as_nan, free_programs_near_mapping_limit, gc_paused, has_loops, program_cache
 from magdesign.design._sqp.jet import _values
@@ -86,11 +87,18 @@ def solve_batch(problem, y0, thetas, settings, *, chunk=None, progress=None, con
 @per_problem
 def _iterative(problem):
     """Whether the problem's model runs while loops of its own (an iterative solve, such
-    as an axisymmetric dome's path), read from one trace of its values."""
+    as an axisymmetric dome's path), read from one trace of its values; kept on disk by
+    the problem's structure and shapes (:func:`magdesign._export.remembered`), so that a
+    second run of a sweep does not trace the model again."""
     host = _host(problem)
     shapes = [jax.ShapeDtypeStruct(np.shape(a), jnp.float64) for a in (host.y0, host.theta)]
-    with errors_as_nan():
-        return has_loops(functools.partial(_values, problem), *shapes)
+    avals = [(np.shape(leaf), str(leaf.dtype)) for leaf in host.leaves]
+
+    def traced():
+        with errors_as_nan():
+            return has_loops(functools.partial(_values, problem), *shapes)
+
+    return _export.remembered("iterative", f"{host.key!r}\n{avals}\n{[s.shape for s in shapes]}", traced)
 
 
 def usable_cores():

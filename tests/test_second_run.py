@@ -1,0 +1,103 @@
+"""A command's second run compiles and traces nothing: its spec stage makes its arrays
+without programs (magdesign._tracing.on_device), its solver and model programs are read
+from the kept executables (magdesign._export), and what it would learn from a trace
+(whether a model runs loops of its own) is kept beside them."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from magdesign._tracing import on_device, random_key, strongly_typed
+
+DEFAULT_SPEC = str(Path(__file__).resolve().parent.parent / "magdesign" / "design" / "default.toml")
+
+# Prints {"compiled": n, "traced": n} after running argv[1] in a new process: a command
+# (the rest of argv its arguments) or "spec" (the spec stage of the default design and
+# the host-side checks a command makes of it).
+_COUNTED = textwrap.dedent(
+    """
+    import contextlib, io, json, sys
+    import jax
+    events = []
+    jax.monitoring.register_event_duration_secs_listener(lambda event, seconds, **kwargs: events.append(event))
+    if sys.argv[1] == "spec":
+        import numpy as np
+        from magdesign._tracing import random_key
+        from magdesign.mechanics._ladder import bound
+        from magdesign.scene import with_parameters
+        from magdesign.spec.design import default_spec, problem_from_spec
+        problem, scene = problem_from_spec(default_spec(), fidelity="reissner")
+        with_parameters(scene, {v.name: float(v.start) for v in problem.variables})
+        random_key(0)
+        float(bound(1.0, 1.01, True))
+    else:
+        from magdesign import cli
+        with contextlib.redirect_stdout(io.StringIO()):
+            cli.main(sys.argv[1:])
+    count = lambda name: sum(event == f"/jax/core/compile/{name}_duration" for event in events)
+    print(json.dumps({"compiled": count("backend_compile"), "traced": count("jaxpr_trace")}))
+    """
+)
+
+
+def _counted(*arguments, cache=None):
+    environment = {**os.environ, "MAGDESIGN_NO_EXPORT": ""}
+    if cache is not None:
+        environment["MAGDESIGN_CACHE_DIR"] = str(cache)
+    done = subprocess.run(
+        [sys.executable, "-c", _COUNTED, *arguments], capture_output=True, text=True, check=True, env=environment
+    )
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def test_the_spec_stage_compiles_and_traces_nothing_in_a_new_process():
+    assert _counted("spec") == {"compiled": 0, "traced": 0}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["sweep", DEFAULT_SPEC, "--over", "compliance=0.3mm/N:0.34mm/N:3", "--fidelity", "reissner"],
+        ["simulate", DEFAULT_SPEC],
+        ["solve", "--fidelity", "reissner"],
+    ],
+    ids=["sweep", "simulate", "solve"],
+)
+def test_a_second_run_of_a_command_compiles_and_traces_nothing(tmp_path, command):
+    arguments = [*command, "--json", "--quiet"]
+    first = _counted(*arguments, cache=tmp_path)
+    assert first["compiled"] > 0  # a fresh cache: the first run compiles the programs it keeps
+    assert _counted(*arguments, cache=tmp_path) == {"compiled": 0, "traced": 0}
+
+
+def test_random_key_is_jax_random_key():
+    for seed in (0, 1, 7, 2**32 + 5, 2**62 + 3):
+        made = random_key(seed)
+        assert jax.random.key_impl(made) == jax.random.key_impl(jax.random.key(seed))
+        np.testing.assert_array_equal(jax.random.key_data(made), jax.random.key_data(jax.random.key(seed)))
+    np.testing.assert_array_equal(jax.random.key_data(random_key(-3)), jax.random.key_data(jax.random.key(-3)))
+
+
+def test_on_device_and_strongly_typed_make_strong_arrays_of_the_same_values():
+    for value in (0.32e-3, [1.0, 2.5, -3.0], np.array([[1.0, 2.0]]), 3):
+        made = on_device(value)
+        assert isinstance(made, jax.Array) and not made.weak_type
+        assert made.dtype == np.asarray(value).dtype
+        np.testing.assert_array_equal(made, np.asarray(value))
+    weak = jnp.asarray(1.25)
+    assert weak.weak_type and on_device(weak) is weak  # a jax array is left as it is
+    strong = strongly_typed(weak)
+    assert not strong.weak_type and strong.dtype == jnp.float64 and float(strong) == 1.25
+    assert strongly_typed(strong) is strong
+    from_numpy = strongly_typed(np.array([0.5, 2.0]))
+    assert isinstance(from_numpy, jax.Array) and not from_numpy.weak_type
+    np.testing.assert_array_equal(from_numpy, [0.5, 2.0])
