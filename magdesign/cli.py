@@ -64,7 +64,14 @@ from magdesign.spec.design import (
     problem_from_spec,
     stated_value,
 )
-from magdesign.spec.levels import estimate, estimates_json, estimates_text, parse_accuracy, solve_to_accuracy
+from magdesign.spec.levels import (
+    estimate,
+    estimates_json,
+    estimates_text,
+    levels_of,
+    parse_accuracy,
+    solve_to_accuracy,
+)
 from magdesign.spec.scene import scene_from_spec
 from magdesign.spec.sizes import check_fits
 from magdesign.spec.sweep import input_units, sweep_points
@@ -381,11 +388,13 @@ def _estimates(result, accurate):
     return estimate(result.source, result.parameters, base=result.outputs)
 
 
-def _levels_at(spec, fidelity):
-    """The levels a run of ``spec`` with ``--fidelity`` (a mechanics level, or None) is at."""
+def _levels_at(spec, fidelity=None):
+    """The levels a run of ``spec`` with ``--fidelity`` (a mechanics level, or None) is at: the
+    models' fidelities and a skin's field ("skin linear 60x60x6"), or "" for neither."""
     if fidelity is not None:
         spec = {**spec, "mechanics": {**spec.get("mechanics", {}), "fidelity": fidelity}}
-    return fidelity_levels(spec)
+    skin = levels_of(spec).get("skin")
+    return ", ".join(part for part in (fidelity_levels(spec), skin and f"skin {skin}") if part)
 
 
 def _write_answer(args, result):
@@ -510,7 +519,7 @@ def run_simulate(args):
     spec = load_spec(args.spec)
     scene, start = scene_at_start(spec)
     loads = loads_from_spec(spec)
-    levels = fidelity_levels(spec)
+    levels = _levels_at(spec)
     stage(f"simulating the load sweep{' at ' + levels if levels else ''} ({FIRST_CALL})")
     result, outputs = _simulate(scene, loads, key=jax.random.key(0))
     warn_if_clipping(scene, result)
@@ -557,7 +566,7 @@ def run_tolerance(args):
     tp = tolerance_problem_from_spec(spec)
     # the samples' outputs are kept (samples x outputs float64), twice while they are joined
     check_fits(f"--samples {args.samples}", args.samples * len(tp.problem.outputs), factor=2, what="its outputs")
-    levels = fidelity_levels(spec)
+    levels = _levels_at(spec)
 
     def analyse(result, what):
         if not result.successful:
@@ -593,7 +602,8 @@ def run_tolerance(args):
         print(f"tolerances:\n{tolerance_analysis.tolerance_lines(tp)}")
         for name, result, carlo in runs:
             held = f", every limit held at {args.robust:g} sigma (first order)" if name == "robust" else ""
-            print(f"\n{name} design ({levels}{held}):\n{result.table()}\n")
+            at = f" ({levels}{held})" if levels else f" ({held[2:]})" if held else ""
+            print(f"\n{name} design{at}:\n{result.table()}\n")
             print(carlo.table())
         if args.robust is not None:
             print(

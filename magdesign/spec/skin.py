@@ -158,7 +158,7 @@ def check_contact_strain(scene, loads):
         f"so its displacements and the outputs may be off by as much; a smaller force, a stiffer layer or {remedy} "
         "(indenter.radius) lowers the strain (mechanics.thickness does not, while the patch is small against it)",
         PlausibilityWarning,
-        stacklevel=4,
+        stacklevel=2,  # at one place whoever builds the scene: the command says it once
     )
 
 
@@ -252,7 +252,7 @@ def _check_pattern_nodes(key, counts, size, period):
             f"(magnet.period); the default puts {NODES_PER_PERIOD} in a period, and the field's error "
             "grows as the spacing squared",
             PlausibilityWarning,
-            stacklevel=4,
+            stacklevel=2,  # at one place whoever builds the scene: the command says it once
         )
 
 
