@@ -9,6 +9,9 @@
         [--plot FILE] [--fidelity LEVEL] [--quiet] [--devices N]
         [--coordinator HOST:PORT --num-processes N --process-id I | --distributed]
 
+A skin's design spec with ``design.grids`` (candidate ``sensor.grid`` values) is solved by
+``solve`` once per grid, fewest chips first, up to the first success (:func:`_solve_grids`).
+
 Exit codes: 0 done (solve: solved), 1 internal error (a bug: one line; ``--debug`` shows
 the traceback) or a stdout that cannot be written (a full disk), 2 bad spec or arguments
 (one line naming the key), 3 solve not successful (the status and the violated target are
@@ -67,8 +70,10 @@ from magdesign.scene import (
     with_parameters,
 )
 from magdesign.scene.core import warn_if_clipping
+from magdesign.spec.chips import fewest_chips
 from magdesign.spec.design import (
     default_spec,
+    design_grids,
     exact_levels,
     fidelity_levels,
     load_spec,
@@ -159,6 +164,8 @@ def run_solve(args):
     auto = args.fidelity in (None, "auto")
     if accuracy is not None and not auto:
         raise SpecError("--accuracy: it picks every model's level itself; give --accuracy or --fidelity, not both")
+    if design_grids(spec) is not None:  # candidate chip grids: the design at each, fewest chips first
+        return _solve_grids(args, spec, began)
     problem, _ = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
     if "tolerances" in spec.get("design", {}):  # read by the tolerance command: one rule for both
         with warnings.catch_warnings():  # the spec's warnings are said once, above
@@ -220,6 +227,72 @@ def run_solve(args):
     return 0 if result.status == "successful" and reached else EXIT_NOT_SOLVED
 
 
+def _solve_grids(args, spec, began):
+    """solve with ``design.grids``: the design solved at each candidate ``sensor.grid``, fewest
+    chips first, until one succeeds (:func:`magdesign.spec.fewest_chips`); each trial's status
+    in a table, then the first successful grid's answer as a solve reports one (its --write,
+    --plot). Exit 3 where no grid succeeds."""
+    for option, given in (
+        ("--accuracy", args.accuracy is not None),
+        ("--fidelity", args.fidelity not in (None, "auto")),
+        ("--timing", args.timing),
+    ):
+        if given:
+            raise SpecError(
+                f"{option}: not with design.grids (each candidate grid is solved once, at the spec's levels)"
+            )
+    grids = design_grids(spec)
+    levels = _levels_at(spec)
+    stage(f"{_solving_at(levels)} at each candidate grid, fewest chips first ({FIRST_CALL})")
+    found = fewest_chips(spec, grids, key="design.grids", before=lambda grid: stage(f"sensor.grid = {list(grid)}"))
+    best = found.best
+    result = None if best is None else best.result
+    estimates = None if result is None else _estimates(result, None)
+    objective = None
+    if result is not None and result.objective is not None:
+        name, sense = result.objective
+        objective = {"output": name, "sense": sense, "value": result.outputs[name]}
+    if args.json:
+        solved = [trial.result for trial in found.trials if trial.result is not None]
+        document = (
+            {
+                "parameters": {},
+                "targets": {},
+                "steps": sum(r.steps for r in solved),
+                "seconds": sum(r.seconds for r in solved),
+            }
+            if result is None
+            else {**result.to_json(), **estimates_json(result.source, estimates)}
+        )
+        document.update(found.to_json(), fidelity=levels, objective=objective)
+        document["total_seconds"] = time.perf_counter() - began
+        print(json_text(document))
+    else:
+        unsized = {**spec, "sensor": {k: v for k, v in spec["sensor"].items() if k != "grid"}}  # no grid found
+        print(_designed(unsized if result is None else result.source, args.spec))
+        print(f"candidate grids, fewest chips first{' (' + levels + ')' if levels else ''}:\n{found.table()}\n")
+        if result is None:
+            print(f"no candidate grid succeeded (status: {found.status})")
+        else:
+            print(f"the answer, sensor.grid = {list(best.grid)} ({best.chips} chips):\n{result.table()}\n")
+            if estimates is not None:
+                print(estimates_text(result.source, estimates, result.outputs, result.units))
+        print(f"total time: {time.perf_counter() - began:.3g} s")
+    if result is None:
+        if args.write or args.plot:
+            print("magdesign solve: no candidate grid succeeded: nothing written", file=sys.stderr)
+        return EXIT_NOT_SOLVED
+    if args.write:
+        _write_answer(args, result)
+    if args.plot:
+        from magdesign.design.plot import plot_design
+
+        stage(f"writing {args.plot}: each target and limit along each variable, at sensor.grid = {list(best.grid)}")
+        plot_design(problem_from_spec(result.source)[0], result, args.plot)
+        wrote(args.plot)
+    return 0
+
+
 def _solving_at(levels: str) -> str:
     """The progress line's stage: "solving at" the levels, or "solving" for a scene without any."""
     return f"solving at {levels}" if levels else "solving"
@@ -255,6 +328,16 @@ def _estimates(result, accurate):
         return accurate and accurate.estimates
     stage(f"estimating each output's error: each model one level finer ({FIRST_CALL})")
     return estimate(result.source, result.parameters, base=result.outputs)
+
+
+def _no_grids(spec, command):
+    """SpecError naming design.grids: the candidate grids are ``solve``'s search, and
+    ``command`` would silently solve the spec's own sensor.grid instead."""
+    if design_grids(spec) is not None:
+        raise SpecError(
+            f"design.grids: magdesign {command} takes the spec's own sensor.grid; the candidate grids are for "
+            "magdesign solve (drop design.grids, and set sensor.grid to the grid to analyse)"
+        )
 
 
 def _levels_at(spec, fidelity=None):
@@ -333,6 +416,7 @@ def _start_devices(args):
 def run_sweep(args):
     _start_devices(args)
     spec = load_spec(args.spec)
+    _no_grids(spec, "sweep")
     if args.plot and args.points is None and len(args.over) > 2:
         raise SpecError("--plot: a picture shows 1 or 2 swept keys (curves or maps)")
     problem, scene = problem_from_spec(spec, fidelity=args.fidelity)
@@ -432,6 +516,7 @@ def run_tolerance(args):
     if not 0 <= args.seed < 2**63:  # jax.random.key takes a 64-bit signed integer
         raise SpecError(f"--seed {args.seed}: expected a whole number from 0 to 2**63 - 1")
     spec = load_spec(args.spec)
+    _no_grids(spec, "tolerance")
     tp = tolerance_problem_from_spec(spec)
     # the samples' outputs are kept (samples x outputs float64), twice while they are joined
     check_fits(f"--samples {args.samples}", args.samples * len(tp.problem.outputs), factor=2, what="its outputs")
