@@ -115,9 +115,20 @@ class Stdout:
         return getattr(self._stream, name)
 
 
-def show_warning(message, category, filename, lineno, file=None, line=None):
-    """A warning as one line on stderr ("magdesign: warning: ..."), without a source line."""
-    print(f"magdesign: warning: {message}", file=sys.stderr if file is None else file)
+def show_warnings_once():
+    """A ``warnings.showwarning`` for one command: each warning as one line on stderr
+    ("magdesign: warning: ..."), without a source line, and each message once. A command
+    builds its scene more than once (a solve's error estimate, each candidate grid), and
+    Python's once-per-place rule forgets what it said whenever a ``catch_warnings`` block
+    ends, so the command keeps its own record."""
+    shown = set()
+
+    def show_warning(message, category, filename, lineno, file=None, line=None):
+        if str(message) not in shown:
+            shown.add(str(message))
+            print(f"magdesign: warning: {message}", file=sys.stderr if file is None else file)
+
+    return show_warning
 
 
 def note_unraisable(report):

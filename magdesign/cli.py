@@ -55,7 +55,7 @@ from magdesign._cli_streams import (
     fail,
     json_text,
     note_unraisable,
-    show_warning,
+    show_warnings_once,
 )
 from magdesign._progress import stage, wrote
 from magdesign.design import solve as solve_problem
@@ -590,7 +590,7 @@ def run_accuracy(args):
 def main(argv=None):
     args = build_parser().parse_args(argv)
     use_compilation_cache(getattr(args, "debug", False))
-    warnings.showwarning = show_warning
+    warnings.showwarning = show_warnings_once()
     command = {
         "solve": run_solve,
         "simulate": run_simulate,
