@@ -127,7 +127,12 @@ def _compiled_chunk(tp, scene, key, size, names):
     temporaries, which grow with the samples) exceeds MEMORY_SHARE of the memory available
     here (:func:`~magdesign.spec.sizes.available_bytes`)."""
     compiled = _chunk.lower(tp, scene, key, size, names).compile()
-    analysis = compiled.compiled.memory_analysis()
+    # equinox's Compiled wraps JAX's; a JAX or backend without the analysis keeps the size
+    inner = getattr(compiled, "compiled", compiled)
+    try:
+        analysis = inner.memory_analysis()
+    except (AttributeError, NotImplementedError):
+        analysis = None
     budget = available_bytes()
     if analysis is None or budget is None or size == 1:
         return compiled, size
