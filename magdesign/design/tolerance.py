@@ -47,16 +47,12 @@ from magdesign.design.problem import Limit, Problem
 from magdesign.design.report import DesignResult, format_quantity
 from magdesign.design.solve import solve
 from magdesign.scene import AbstractScene, outputs, parameters, with_parameters
-from magdesign.spec.sizes import available_bytes
 from magdesign.spec.tolerance import AXES, EFFECT_INPUTS, ToleranceProblem, check_spreads
 from magdesign.spec.tolerance import tolerance_problem_from_spec as tolerance_problem_from_spec
 from magdesign.units import convert
 
 # Samples per compiled batch: bounds the memory of a run (a few hundred MB for the default scene).
 CHUNK = 16384
-# A batch's working memory (XLA's count for its compiled program) may take at most this share
-# of the memory available here; a larger batch is cut (a skin's samples take tens of MB each).
-MEMORY_SHARE = 0.5
 PERCENTILES = (0.1, 1.0, 50.0, 99.0, 99.9)
 # A table leaves out an input whose first-order part is 0 and whose Monte Carlo slope is
 # below this many standard errors of a regression slope, std / sqrt(samples): noise.
@@ -119,28 +115,6 @@ def _chunk(tp: ToleranceProblem, scene: AbstractScene, key: PRNGKeyArray, count:
     run = jax.vmap(lambda ui: outputs(perturb(scene, tp.inputs, tp.sensors, ui), tp.loads))
     result = run(u)
     return u, {name: result[name] for name in names}
-
-
-def _compiled_chunk(tp, scene, key, size, names):
-    """(the compiled :func:`_chunk` of ``size`` samples, that size): compiled once, and again
-    at a smaller size where XLA's count of the program's memory (arguments, outputs and
-    temporaries, which grow with the samples) exceeds MEMORY_SHARE of the memory available
-    here (:func:`~magdesign.spec.sizes.available_bytes`)."""
-    compiled = _chunk.lower(tp, scene, key, size, names).compile()
-    # equinox's Compiled wraps JAX's; a JAX or backend without the analysis keeps the size
-    inner = getattr(compiled, "compiled", compiled)
-    try:
-        analysis = inner.memory_analysis()
-    except (AttributeError, NotImplementedError):
-        analysis = None
-    budget = available_bytes()
-    if analysis is None or budget is None or size == 1:
-        return compiled, size
-    need = analysis.temp_size_in_bytes + analysis.argument_size_in_bytes + analysis.output_size_in_bytes
-    if need <= MEMORY_SHARE * budget:
-        return compiled, size
-    size = max(1, int(size * MEMORY_SHARE * budget / need))
-    return _chunk.lower(tp, scene, key, size, names).compile(), size
 
 
 class ToleranceResult(eqx.Module):
@@ -319,8 +293,7 @@ def monte_carlo(
         values: the design's variables (e.g. a solve's ``parameters``).
         samples: how many perturbed scenes to simulate (>= 1).
         seed: the PRNG seed (jax.random); a run is reproducible for the same seed and chunk.
-        chunk: samples per compiled batch, which bounds memory; fewer where the batch's
-            program would take more than MEMORY_SHARE of the memory available here.
+        chunk: samples per compiled batch, which bounds memory.
         progress: a progress bar on stderr: True, False, or None (when stderr is a
             terminal and the run takes more than a second).
 
@@ -339,14 +312,12 @@ def monte_carlo(
     size = -(-samples // chunks)
     dimension = len(tp.unit_std)
     key = jax.random.key(seed)
-    run, size = _compiled_chunk(tp, scene, key, size, tuple(names))
-    chunks = -(-samples // size)
     drawn = {name: [] for name in names}
     sum_u, sum_uu, sum_o, sum_ou, used = np.zeros(dimension), np.zeros(dimension), {}, {}, 0
     bar = tqdm(total=samples, unit="sample", delay=1.0, disable=None if progress is None else not progress, leave=False)
     for index in range(chunks):
         count = min(size, samples - index * size)
-        u, result = run(tp, scene, jax.random.fold_in(key, index), size, tuple(names))
+        u, result = _chunk(tp, scene, jax.random.fold_in(key, index), size, tuple(names))
         u = np.asarray(u)[:count]
         result = {name: np.asarray(value)[:count] for name, value in result.items()}
         for name in names:

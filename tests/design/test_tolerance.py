@@ -13,7 +13,6 @@ import importlib.resources
 import json
 import math
 
-import jax
 import numpy as np
 import pytest
 
@@ -219,26 +218,3 @@ def test_a_spread_is_checked_again_about_the_solved_design():
     tp = tolerance_problem_from_spec(spec)
     with pytest.raises(SpecError, match=r"design.tolerances.mechanics.thickness \(about the design's"):
         monte_carlo(tp, POINT, samples=10)
-
-
-def test_a_batch_too_large_for_the_memory_is_cut_to_fit(gaussian_br, monkeypatch):
-    """A batch whose compiled program would take more than MEMORY_SHARE of the memory
-    available is compiled again smaller (a skin's samples take tens of MB each): with a
-    budget a tenth of XLA's count for 400 samples, about 20 a batch; the draws of each
-    batch differ, the statistics do not."""
-    import magdesign.design.tolerance as tolerance
-
-    key = jax.random.key(0)
-    scene = gaussian_br.at(POINT)
-    names = tuple(gaussian_br.problem.outputs)
-    analysis = tolerance._chunk.lower(gaussian_br, scene, key, 400, names).compile().compiled.memory_analysis()
-    need = analysis.temp_size_in_bytes + analysis.argument_size_in_bytes + analysis.output_size_in_bytes
-    monkeypatch.setattr(tolerance, "available_bytes", lambda: need / 10)
-    _, size = tolerance._compiled_chunk(gaussian_br, scene, key, 400, names)
-    assert 10 <= size <= 20  # 400 x 0.5 / 10, less the part that does not grow with the samples
-    cut = monte_carlo(gaussian_br, POINT, samples=400, seed=5)
-    monkeypatch.undo()
-    whole = monte_carlo(gaussian_br, POINT, samples=400, seed=5)
-    assert cut.samples == whole.samples == 400
-    for name, row in whole.outputs.items():
-        assert cut.outputs[name]["std"] == pytest.approx(row["std"], rel=0.25)
