@@ -9,6 +9,9 @@
         [--plot FILE] [--fidelity LEVEL] [--quiet] [--devices N]
         [--coordinator HOST:PORT --num-processes N --process-id I | --distributed]
 
+A skin's design spec with ``design.grids`` (candidate ``sensor.grid`` values) is solved by
+``solve`` once per grid, fewest chips first, up to the first success (:func:`_solve_grids`).
+
 Exit codes: 0 done (solve: solved), 1 internal error (a bug: one line; ``--debug`` shows
 the traceback) or a stdout that cannot be written (a full disk), 2 bad spec or arguments
 (one line naming the key), 3 solve not successful (the status and the violated target are
@@ -24,14 +27,14 @@ Compiled programs are kept in a persistent cache (~/.cache/magdesign/jax/<this C
 :func:`cache_directory`; MAGDESIGN_NO_CACHE=1 turns it off), and the traced programs of a
 solve, simulate or sweep beside it (:func:`export_directory`, :mod:`magdesign._export`;
 MAGDESIGN_NO_EXPORT=1 turns them off), so that a second run neither traces nor compiles.
+
+The commands' arguments are :mod:`magdesign._cli_parser`'s; how the command writes to stdout
+and stderr, and fails to, is :mod:`magdesign._cli_streams`'s.
 """
 
-import argparse
 import atexit
 import gc
 import importlib
-import importlib.metadata
-import json
 import math
 import os
 import sys
@@ -44,6 +47,17 @@ import numpy as np
 
 from magdesign import _export, _progress
 from magdesign._cache import cache_directory, export_directory, use_compilation_cache
+from magdesign._cli_parser import build_parser
+from magdesign._cli_streams import (
+    Stdout,
+    StdoutFailed,
+    check_output_path,
+    drop_stdout,
+    fail,
+    json_text,
+    note_unraisable,
+    show_warnings_once,
+)
 from magdesign._progress import stage, wrote
 from magdesign._tracing import random_key
 from magdesign.design import solve as solve_problem
@@ -58,15 +72,24 @@ from magdesign.scene import (
     with_parameters,
 )
 from magdesign.scene.core import warn_if_clipping
+from magdesign.spec.chips import fewest_chips
 from magdesign.spec.design import (
     default_spec,
+    design_grids,
     exact_levels,
     fidelity_levels,
     load_spec,
     problem_from_spec,
     stated_value,
 )
-from magdesign.spec.levels import estimate, estimates_json, estimates_text, parse_accuracy, solve_to_accuracy
+from magdesign.spec.levels import (
+    estimate,
+    estimates_json,
+    estimates_text,
+    levels_of,
+    parse_accuracy,
+    solve_to_accuracy,
+)
 from magdesign.spec.scene import scene_from_spec
 from magdesign.spec.sizes import check_fits
 from magdesign.spec.sweep import input_units, sweep_points
@@ -93,148 +116,6 @@ EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by 
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, as a shell reports a writer whose reader left
 # Said where a solve starts: a fresh process traces and compiles the solver first.
 FIRST_CALL = "the first call compiles the model, up to minutes at the exact levels; later runs load it from the cache"
-
-
-def build_parser():
-    debug = argparse.ArgumentParser(add_help=False)
-    # Taken before or after the command; SUPPRESS keeps a command's default from hiding the first.
-    debug.add_argument(
-        "--debug", action="store_true", default=argparse.SUPPRESS, help="show the traceback of an internal error"
-    )
-    parser = argparse.ArgumentParser(
-        prog="magdesign",
-        parents=[debug],
-        description="Design magnetic tactile sensors by differentiable optimisation.",
-        epilog="Exit codes: 0 done, 1 internal error (or stdout not writable), 2 bad spec or arguments, "
-        "3 not solved (or mechanics not converged), 130 interrupted, 141 stdout closed by its reader. "
-        "Progress lines go to stderr (--quiet: none). Specs are TOML: every key, its unit, default and range is in "
-        "the spec reference (`python -m magdesign.spec.reference` prints it; also in the docs).",
-    )
-    parser.add_argument("--version", action="version", version=f"magdesign {importlib.metadata.version('magdesign')}")
-    sub = parser.add_subparsers(dest="command", required=True)
-    quiet = argparse.ArgumentParser(add_help=False)
-    quiet.add_argument(
-        "--quiet", action="store_true", help="no progress lines or bars on stderr (errors and warnings still print)"
-    )
-    add_parser = lambda name, **kwargs: sub.add_parser(name, parents=[debug, quiet], **kwargs)  # noqa: E731
-
-    solve = add_parser("solve", help="solve a design spec (default: the soft dome with a Hall sensor)")
-    solve.add_argument("spec", nargs="?", help="design spec (TOML); the built-in default design if omitted")
-    solve.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
-    solve.add_argument(
-        "--fidelity",
-        default="auto",
-        help="auto (default): solve at the spec's levels, then confirm from that answer with the "
-        "exact dome (axisymmetric) and field (exact) models, and report both; or one mechanics "
-        "level for every solve (e.g. reissner, axisymmetric)",
-    )
-    solve.add_argument(
-        "--accuracy",
-        metavar="TOL",
-        help="a relative accuracy (1%% or 0.01): each model from its cheapest level up until every "
-        "target's and limit's estimated error is within it (else exit 3); not with --fidelity",
-    )
-    solve.add_argument("--plot", metavar="FILE", help="write a PNG of the targets and limits around the design")
-    solve.add_argument(
-        "--write",
-        metavar="FILE",
-        help="write the answer as a spec (TOML): the spec with the solved "
-        "values in its scene tables, at the answer's levels, for simulate and show",
-    )
-    solve.add_argument(
-        "--timing", action="store_true", help="solve the answer's problem again and report that warm time too"
-    )
-
-    simulate_cmd = add_parser("simulate", help="run a scene's forward chain over its load sweep")
-    simulate_cmd.add_argument(
-        "spec",
-        help="scene or design spec (TOML); a design spec simulates its scene as "
-        "written (a [design.variables] entry the scene does not state at its start), then "
-        "lists the design outputs",
-    )
-    simulate_cmd.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
-
-    accuracy_cmd = add_parser("accuracy", help="measure every model's error against its time, on this machine")
-    accuracy_cmd.add_argument(
-        "--quick",
-        action="store_true",
-        help="a cheaper tier, under a minute on 2 cores: 3 repeats; the dome at Reissner against "
-        "the default mesh 2x16 (in place of 4x32), the spheres at 4 cells across; no suspension "
-        "pole, no default design",
-    )
-    accuracy_cmd.add_argument("--json", action="store_true", help="print a JSON list of rows instead of the table")
-    accuracy_cmd.add_argument("--plot", metavar="FILE", help="write a PNG of error against time (log-log)")
-
-    sweep_cmd = add_parser("sweep", help="solve a design spec at every point of a grid (or list) of its inputs")
-    sweep_cmd.add_argument("spec", help="design spec (TOML)")
-    sweep_cmd.add_argument(
-        "--over",
-        metavar="KEY=LO:HI:N",
-        action="append",
-        default=[],
-        help="sweep KEY over N values from LO to HI (units as in specs, e.g. "
-        "mechanics.outer_radius=6mm:10mm:5); repeat for a grid. KEY: a target (compliance), a limit "
-        "bound (field_max.upper) or a scene parameter that is not a variable",
-    )
-    sweep_cmd.add_argument(
-        "--points",
-        metavar="CSV",
-        help="a CSV file of points instead of a grid: a header row of "
-        "keys, then one row per point (quantities with units, or SI numbers)",
-    )
-    sweep_cmd.add_argument("--json", action="store_true", help="print one JSON object with every point")
-    sweep_cmd.add_argument("--csv", metavar="FILE", help="write every point (SI) to a CSV file")
-    sweep_cmd.add_argument(
-        "--plot",
-        metavar="FILE",
-        help="write a PNG: curves with their derivatives (one key), maps with contours (two keys)",
-    )
-    sweep_cmd.add_argument(
-        "--fidelity", help="one mechanics level for every point (e.g. reissner, axisymmetric); default: the spec's"
-    )
-    sweep_cmd.add_argument(
-        "--devices",
-        type=int,
-        metavar="N",
-        help="split this machine's CPU into N XLA devices and the points over them (a model "
-        "with slow loops of its own goes a point at a time on a thread per core instead, each "
-        "started from the one before's predicted optimum)",
-    )
-    sweep_cmd.add_argument("--coordinator", metavar="HOST:PORT", help="jax.distributed: process 0's address")
-    sweep_cmd.add_argument("--num-processes", type=int, metavar="N", help="jax.distributed: how many processes")
-    sweep_cmd.add_argument("--process-id", type=int, metavar="I", help="jax.distributed: this process's index")
-    sweep_cmd.add_argument(
-        "--distributed",
-        action="store_true",
-        help="jax.distributed from the cluster's environment (SLURM, Open MPI, JAX_COORDINATOR_ADDRESS)",
-    )
-
-    show = add_parser("show", help="draw the sensor in its axial plane with its field, at rest and at the largest load")
-    show.add_argument("spec", help="scene or design spec (TOML); a design spec shows its scene as written")
-    show.add_argument("--plot", metavar="FILE", required=True, help="the PNG to write")
-
-    tolerance = add_parser(
-        "tolerance",
-        help="solve a design spec, then a Monte Carlo over its [design.tolerances]: "
-        "each output's spread, the yield, the inputs that matter most",
-    )
-    tolerance.add_argument("spec", help="design spec (TOML) with a [design.tolerances] table")
-    tolerance.add_argument(
-        "--samples", type=int, default=100_000, metavar="N", help="Monte Carlo samples (default 100000)"
-    )
-    tolerance.add_argument("--json", action="store_true", help="print one JSON object instead of the tables")
-    tolerance.add_argument(
-        "--plot", metavar="FILE", help="write a PNG of each target and limit output's histogram with its bounds"
-    )
-    tolerance.add_argument(
-        "--robust",
-        type=float,
-        metavar="K",
-        help="also solve with every limit held at K first-order "
-        "sigmas of its output, and give that design's Monte Carlo beside the nominal one",
-    )
-    tolerance.add_argument("--seed", type=int, default=0, metavar="S", help="PRNG seed of the samples (default 0)")
-    return parser
 
 
 def scene_at_start(spec):
@@ -285,6 +166,8 @@ def run_solve(args):
     auto = args.fidelity in (None, "auto")
     if accuracy is not None and not auto:
         raise SpecError("--accuracy: it picks every model's level itself; give --accuracy or --fidelity, not both")
+    if design_grids(spec) is not None:  # candidate chip grids: the design at each, fewest chips first
+        return _solve_grids(args, spec, began)
     problem, _ = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
     if "tolerances" in spec.get("design", {}):  # read by the tolerance command: one rule for both
         with warnings.catch_warnings():  # the spec's warnings are said once, above
@@ -346,6 +229,72 @@ def run_solve(args):
     return 0 if result.status == "successful" and reached else EXIT_NOT_SOLVED
 
 
+def _solve_grids(args, spec, began):
+    """solve with ``design.grids``: the design solved at each candidate ``sensor.grid``, fewest
+    chips first, until one succeeds (:func:`magdesign.spec.fewest_chips`); each trial's status
+    in a table, then the first successful grid's answer as a solve reports one (its --write,
+    --plot). Exit 3 where no grid succeeds."""
+    for option, given in (
+        ("--accuracy", args.accuracy is not None),
+        ("--fidelity", args.fidelity not in (None, "auto")),
+        ("--timing", args.timing),
+    ):
+        if given:
+            raise SpecError(
+                f"{option}: not with design.grids (each candidate grid is solved once, at the spec's levels)"
+            )
+    grids = design_grids(spec)
+    levels = _levels_at(spec)
+    stage(f"{_solving_at(levels)} at each candidate grid, fewest chips first ({FIRST_CALL})")
+    found = fewest_chips(spec, grids, key="design.grids", before=lambda grid: stage(f"sensor.grid = {list(grid)}"))
+    best = found.best
+    result = None if best is None else best.result
+    estimates = None if result is None else _estimates(result, None)
+    objective = None
+    if result is not None and result.objective is not None:
+        name, sense = result.objective
+        objective = {"output": name, "sense": sense, "value": result.outputs[name]}
+    if args.json:
+        solved = [trial.result for trial in found.trials if trial.result is not None]
+        document = (
+            {
+                "parameters": {},
+                "targets": {},
+                "steps": sum(r.steps for r in solved),
+                "seconds": sum(r.seconds for r in solved),
+            }
+            if result is None
+            else {**result.to_json(), **estimates_json(result.source, estimates)}
+        )
+        document.update(found.to_json(), fidelity=levels, objective=objective)
+        document["total_seconds"] = time.perf_counter() - began
+        print(json_text(document))
+    else:
+        unsized = {**spec, "sensor": {k: v for k, v in spec["sensor"].items() if k != "grid"}}  # no grid found
+        print(_designed(unsized if result is None else result.source, args.spec))
+        print(f"candidate grids, fewest chips first{' (' + levels + ')' if levels else ''}:\n{found.table()}\n")
+        if result is None:
+            print(f"no candidate grid succeeded (status: {found.status})")
+        else:
+            print(f"the answer, sensor.grid = {list(best.grid)} ({best.chips} chips):\n{result.table()}\n")
+            if estimates is not None:
+                print(estimates_text(result.source, estimates, result.outputs, result.units))
+        print(f"total time: {time.perf_counter() - began:.3g} s")
+    if result is None:
+        if args.write or args.plot:
+            print("magdesign solve: no candidate grid succeeded: nothing written", file=sys.stderr)
+        return EXIT_NOT_SOLVED
+    if args.write:
+        _write_answer(args, result)
+    if args.plot:
+        from magdesign.design.plot import plot_design
+
+        stage(f"writing {args.plot}: each target and limit along each variable, at sensor.grid = {list(best.grid)}")
+        plot_design(problem_from_spec(result.source)[0], result, args.plot)
+        wrote(args.plot)
+    return 0
+
+
 def _solving_at(levels: str) -> str:
     """The progress line's stage: "solving at" the levels, or "solving" for a scene without any."""
     return f"solving at {levels}" if levels else "solving"
@@ -383,11 +332,23 @@ def _estimates(result, accurate):
     return estimate(result.source, result.parameters, base=result.outputs)
 
 
-def _levels_at(spec, fidelity):
-    """The levels a run of ``spec`` with ``--fidelity`` (a mechanics level, or None) is at."""
+def _no_grids(spec, command):
+    """SpecError naming design.grids: the candidate grids are ``solve``'s search, and
+    ``command`` would silently solve the spec's own sensor.grid instead."""
+    if design_grids(spec) is not None:
+        raise SpecError(
+            f"design.grids: magdesign {command} takes the spec's own sensor.grid; the candidate grids are for "
+            "magdesign solve (drop design.grids, and set sensor.grid to the grid to analyse)"
+        )
+
+
+def _levels_at(spec, fidelity=None):
+    """The levels a run of ``spec`` with ``--fidelity`` (a mechanics level, or None) is at: the
+    models' fidelities and a skin's field ("skin linear 60x60x6"), or "" for neither."""
     if fidelity is not None:
         spec = {**spec, "mechanics": {**spec.get("mechanics", {}), "fidelity": fidelity}}
-    return fidelity_levels(spec)
+    skin = levels_of(spec).get("skin")
+    return ", ".join(part for part in (fidelity_levels(spec), skin and f"skin {skin}") if part)
 
 
 def _write_answer(args, result):
@@ -457,6 +418,7 @@ def _start_devices(args):
 def run_sweep(args):
     _start_devices(args)
     spec = load_spec(args.spec)
+    _no_grids(spec, "sweep")
     if args.plot and args.points is None and len(args.over) > 2:
         raise SpecError("--plot: a picture shows 1 or 2 swept keys (curves or maps)")
     problem, scene = problem_from_spec(spec, fidelity=args.fidelity)
@@ -512,7 +474,7 @@ def run_simulate(args):
     spec = load_spec(args.spec)
     scene, start = scene_at_start(spec)
     loads = loads_from_spec(spec)
-    levels = fidelity_levels(spec)
+    levels = _levels_at(spec)
     stage(f"simulating the load sweep{' at ' + levels if levels else ''} ({FIRST_CALL})")
     result, outputs = _simulate(scene, loads, key=random_key(0))
     warn_if_clipping(scene, result)
@@ -556,10 +518,11 @@ def run_tolerance(args):
     if not 0 <= args.seed < 2**63:  # jax.random.key takes a 64-bit signed integer
         raise SpecError(f"--seed {args.seed}: expected a whole number from 0 to 2**63 - 1")
     spec = load_spec(args.spec)
+    _no_grids(spec, "tolerance")
     tp = tolerance_problem_from_spec(spec)
     # the samples' outputs are kept (samples x outputs float64), twice while they are joined
     check_fits(f"--samples {args.samples}", args.samples * len(tp.problem.outputs), factor=2, what="its outputs")
-    levels = fidelity_levels(spec)
+    levels = _levels_at(spec)
 
     def analyse(result, what):
         if not result.successful:
@@ -595,7 +558,8 @@ def run_tolerance(args):
         print(f"tolerances:\n{tolerance_analysis.tolerance_lines(tp)}")
         for name, result, carlo in runs:
             held = f", every limit held at {args.robust:g} sigma (first order)" if name == "robust" else ""
-            print(f"\n{name} design ({levels}{held}):\n{result.table()}\n")
+            at = f" ({levels}{held})" if levels else f" ({held[2:]})" if held else ""
+            print(f"\n{name} design{at}:\n{result.table()}\n")
             print(carlo.table())
         if args.robust is not None:
             print(
@@ -625,117 +589,10 @@ def run_accuracy(args):
     return 0
 
 
-def json_text(value) -> str:
-    """``value`` as strict JSON: a non-finite number (which json.dumps would write as the
-    bare, invalid NaN or Infinity) becomes null."""
-
-    def finite(item):
-        if isinstance(item, float):
-            return item if math.isfinite(item) else None
-        if isinstance(item, dict):
-            return {key: finite(entry) for key, entry in item.items()}
-        if isinstance(item, (list, tuple)):
-            return [finite(entry) for entry in item]
-        return item
-
-    return json.dumps(finite(value), allow_nan=False)
-
-
-def check_output_path(path, option="--plot", suffix=".png"):
-    """SpecError unless ``path`` is a file that can be written (checked before any work, so
-    that a long run does not end in an error): a name ending in ``suffix``, no longer than
-    its folder's file system takes, in an existing folder, and not a folder itself. The
-    write is tried: a new file is made and removed at once, an existing one opened to append
-    (unchanged), since permissions alone do not tell (root may "write" in /proc and /sys)."""
-    target = Path(path)
-    folder = target.parent
-    try:
-        longest = os.pathconf(folder, "PC_NAME_MAX")
-    except (OSError, ValueError):
-        longest = 255
-    if len(os.fsencode(target.name)) > longest:
-        raise SpecError(f"{option}: a file name of {len(os.fsencode(target.name))} bytes; at most {longest} there")
-    if target.is_dir():
-        raise SpecError(f"{option} {path}: a folder; give the path of the {suffix} file to write")
-    if target.suffix.lower() != suffix:
-        raise SpecError(f"{option} {path}: give a file name ending in {suffix}")
-    if not folder.is_dir():
-        raise SpecError(f"{option} {path}: no folder {folder}")
-    if target.exists() and not target.is_file():
-        raise SpecError(f"{option} {path}: not a regular file")
-    try:
-        if target.exists():
-            with open(target, "ab"):
-                pass
-        else:
-            with open(target, "xb"):
-                pass
-            target.unlink()
-    except OSError as error:
-        raise SpecError(f"{option} {path}: cannot write there ({error.strerror})") from None
-
-
-def _fail(args, code, kind, message):
-    """One line on stderr; with --json also one JSON object on stdout (its reader wants one,
-    if it is still there)."""
-    print(f"magdesign {args.command}: {message}", file=sys.stderr)
-    if getattr(args, "json", False):
-        try:
-            print(json_text({"error": kind, "message": message, "exit_code": code}), flush=True)
-        except (OSError, _StdoutFailed):
-            _drop_stdout()
-    return code
-
-
-def _drop_stdout():
-    """Send what is left for stdout to the null device, so that Python's last flush at exit
-    does not fail again on a closed or full stdout."""
-    try:
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-    except (OSError, ValueError, AttributeError):  # a stdout without a file descriptor (a test's capture)
-        pass
-
-
-class _StdoutFailed(Exception):
-    """A write to stdout failed (``error``: a closed pipe, a full disk), told apart from
-    the failures of other files."""
-
-    def __init__(self, error):
-        super().__init__(str(error))
-        self.error = error
-
-
-class _Stdout:
-    """``stream`` (sys.stdout) whose write errors raise :class:`_StdoutFailed`."""
-
-    def __init__(self, stream):
-        self._stream = stream
-
-    def write(self, text):
-        try:
-            return self._stream.write(text)
-        except OSError as error:
-            raise _StdoutFailed(error) from None
-
-    def flush(self):
-        try:
-            self._stream.flush()
-        except OSError as error:
-            raise _StdoutFailed(error) from None
-
-    def __getattr__(self, name):
-        return getattr(self._stream, name)
-
-
-def _show_warning(message, category, filename, lineno, file=None, line=None):
-    """A warning as one line on stderr ("magdesign: warning: ..."), without a source line."""
-    print(f"magdesign: warning: {message}", file=sys.stderr if file is None else file)
-
-
 def main(argv=None):
     args = build_parser().parse_args(argv)
     use_compilation_cache(getattr(args, "debug", False))
-    warnings.showwarning = _show_warning
+    warnings.showwarning = show_warnings_once()
     command = {
         "solve": run_solve,
         "simulate": run_simulate,
@@ -747,8 +604,8 @@ def main(argv=None):
     _progress.enable(None if args.quiet else f"magdesign {args.command}")
     kept, directory = _export.directory(), cache_directory()  # the command's exported programs, for its run
     _export.enable(None if directory is None else export_directory(directory))
-    stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
-    unraisable, sys.unraisablehook = sys.unraisablehook, _unraisable
+    stdout, sys.stdout = sys.stdout, Stdout(sys.stdout)
+    unraisable, sys.unraisablehook = sys.unraisablehook, note_unraisable
     try:
         if getattr(args, "plot", None):
             check_output_path(args.plot)
@@ -761,12 +618,12 @@ def main(argv=None):
         sys.stdout.flush()  # a full or closed stdout fails here, not in Python's flush at exit
         return code
     except SpecError as error:
-        return _fail(args, EXIT_BAD_SPEC, "bad_spec", str(error))
+        return fail(args, EXIT_BAD_SPEC, "bad_spec", str(error))
     except KeyboardInterrupt:
         # Ctrl-C: one line, the shell's code for SIGINT; files are written only after the work
-        return _fail(args, EXIT_INTERRUPTED, "interrupted", "interrupted")
-    except _StdoutFailed as failed:
-        _drop_stdout()
+        return fail(args, EXIT_INTERRUPTED, "interrupted", "interrupted")
+    except StdoutFailed as failed:
+        drop_stdout()
         if isinstance(failed.error, BrokenPipeError):  # the reader left (``magdesign ... | head -1``)
             print(f"magdesign {args.command}: stdout closed by its reader; output cut short", file=sys.stderr)
             return EXIT_BROKEN_PIPE
@@ -776,7 +633,7 @@ def main(argv=None):
         if getattr(args, "debug", False):
             raise
         first_line = (str(error).splitlines() or [""])[0][:200]
-        return _fail(
+        return fail(
             args,
             EXIT_INTERNAL,
             "internal_error",
@@ -786,16 +643,6 @@ def main(argv=None):
         _progress.enable(None)
         _export.enable(kept)
         sys.stdout, sys.unraisablehook = stdout, unraisable
-
-
-def _unraisable(report):
-    """sys.unraisablehook during a command: a Ctrl-C that lands in a callback Python cannot
-    raise from (JAX's garbage-collection callback) is noted, not printed, and raised again
-    at the next stage line, file or the command's end; anything else is reported as usual."""
-    if issubclass(report.exc_type, KeyboardInterrupt):
-        _progress.swallowed_interrupt()
-    else:
-        sys.__unraisablehook__(report)
 
 
 if __name__ == "__main__":

@@ -125,7 +125,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from magdesign._numerics import safe_div
+from magdesign._numerics import safe_div, safe_norm
 from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
 from magdesign.fields.layer_field import finer, gauss_levels, layer_field, pattern
@@ -361,6 +361,33 @@ class SkinScene(AbstractScene):
         e_star = 2.0 * self.shear_modulus / (1.0 - self.poisson_ratio)
         force = jnp.maximum(normal_force, CONTACT_FORCE_FLOOR)
         return (3.0 * force * self.sphere_radius / (4.0 * e_star)) ** (1.0 / 3.0)
+
+    def contact_strain(
+        self, normal_force: Float[Array, "..."], shear_force: Float[Array, "... 2"]
+    ) -> Float[Array, "..."]:
+        """The strain under the contact (-), shape (...,): the displacement of the patch's
+        centre, its depth delta and its tangential travel u_t, over the patch's radius a,
+        |(delta, u_t)| / a, for a ``normal_force`` Fn (N, (...,)) and a ``shear_force``
+        (F_x, F_y) (N, (..., 2)), from the half-space's closed forms (Johnson, "Contact
+        Mechanics", 1985, ch. 3 and 7) with G the shear modulus:
+
+        - the sphere's Hertz patch: delta = 3 Fn (1 - nu) / (8 G a) = a^2 / R, so delta / a =
+          a / R, the slope of the pressed surface at the patch's edge, the largest gradient
+          of its displacement; the traction of Hertz's shape moves the centre by
+          u_t = 3 |F_t| (2 - nu) / (16 G a);
+        - the flat punch: delta = Fn (1 - nu) / (4 G a), u_t = |F_t| (2 - nu) / (8 G a)
+          (the punch's face moves as one), the mean gradient under it (its edge is singular).
+
+        On a bonded layer the depth is smaller than the half-space's (by 7 % at a / h = 0.1,
+        22 % at 0.3: :mod:`magdesign.mechanics.skin_layer`), so this overstates the strain
+        a little there."""
+        radius = self.contact_radius(normal_force)
+        g, nu = self.shear_modulus, self.poisson_ratio
+        shape = 1.5 if self.indenter == "sphere" else 1.0  # Hertz's centre over the flat punch's
+        tangential = (2.0 - nu) * jnp.asarray(shear_force, dtype=float)
+        normal = (2.0 * (1.0 - nu) * jnp.asarray(normal_force, dtype=float))[..., None]
+        travel = safe_norm(jnp.concatenate([normal, tangential], axis=-1))  # finite slope at rest too
+        return shape * travel / (8.0 * g * radius * radius)
 
     def surface_load(self, state: Float[Array, "5"]) -> SurfaceLoad:
         """The indenter's load of a load state (x, y, Fn, F_x, F_y) (m, m, N, N, N)."""

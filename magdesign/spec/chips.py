@@ -12,11 +12,11 @@ message.
 
 import copy
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from magdesign.design.report import DesignResult
 from magdesign.design.solve import solve
-from magdesign.spec.design import problem_from_spec
+from magdesign.spec.design import grid_candidate, problem_from_spec
 from magdesign.units import SpecError
 
 
@@ -60,19 +60,51 @@ class FewestChips:
         """ "successful" where a candidate succeeds, else "no_grid_succeeded"."""
         return "successful" if self.best is not None else "no_grid_succeeded"
 
+    def table(self) -> str:
+        """A readable table of the trials: each grid, its chips, its status, and the targets
+        and limits its answer does not meet with its solve's time, or the refusal."""
+        lines = [f"  {'sensor.grid':<13}{'chips':<7}{'status':<20}why"]
+        for trial in self.trials:
+            result = trial.result
+            if result is None:
+                why = trial.reason
+            else:
+                missed = f"not met: {', '.join(result.violated)}; " if result.violated else ""
+                why = f"{missed}solved in {result.seconds:.3g} s"
+            grid = f"[{trial.grid[0]}, {trial.grid[1]}]"
+            lines.append(f"  {grid:<13}{trial.chips:<7}{trial.status:<20}{why}".rstrip())
+        return "\n".join(lines)
 
-def _grid(candidate, index) -> tuple[int, int]:
-    """A candidate [rows, columns] of positive whole numbers, else a SpecError naming it."""
-    if (
-        not isinstance(candidate, Sequence)
-        or len(candidate) != 2
-        or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in candidate)
-    ):
-        raise SpecError(f"grids[{index}]: expected [rows, columns], two whole numbers of 1 or more, got {candidate!r}")
-    return int(candidate[0]), int(candidate[1])
+    def to_json(self) -> dict:
+        """The search as JSON: its status, the design's grid and chip count (None where no
+        grid succeeds), and every trial: its grid, chips, status and refusal, and its solve's
+        :meth:`~magdesign.design.report.DesignResult.to_json` where it was solved."""
+        best = self.best
+        return {
+            "status": self.status,
+            "grid": None if best is None else list(best.grid),
+            "chips": None if best is None else best.chips,
+            "trials": [
+                {
+                    **({} if trial.result is None else trial.result.to_json()),
+                    "grid": list(trial.grid),
+                    "chips": trial.chips,
+                    "status": trial.status,
+                    "reason": trial.reason,
+                }
+                for trial in self.trials
+            ],
+        }
 
 
-def fewest_chips(spec: dict, grids: Sequence[Sequence[int]], **options) -> FewestChips:
+def fewest_chips(
+    spec: dict,
+    grids: Sequence[Sequence[int]],
+    *,
+    key: str = "grids",
+    before: Callable[[tuple[int, int]], None] | None = None,
+    **options,
+) -> FewestChips:
     """Solve a skin's design (``spec``, its chips on ``sensor.grid`` at ``sensor.pitch``) for
     each candidate grid in ``grids`` ([rows, columns] each), fewest chips first (candidates
     of one count in the given order), until one is successful.
@@ -80,6 +112,9 @@ def fewest_chips(spec: dict, grids: Sequence[Sequence[int]], **options) -> Fewes
     Args:
         spec: a skin's design spec (the dict of a TOML file), with ``sensor.grid``.
         grids: the candidate grids, [rows, columns] each.
+        key: the name a bad candidate's error gives it (``key[i]``): "design.grids" where
+            they come from the spec.
+        before: called with each candidate (rows, columns) before it is tried (a progress line).
         options: passed to :func:`magdesign.design.solve` (rtol, atol, max_steps, solver).
 
     Returns:
@@ -92,13 +127,18 @@ def fewest_chips(spec: dict, grids: Sequence[Sequence[int]], **options) -> Fewes
     sensor = spec.get("sensor", {})
     if "grid" not in sensor or "chips" in sensor:
         raise SpecError("sensor.grid: fewest_chips varies the chips' grid; place the chips by sensor.grid and pitch")
-    candidates = sorted((_grid(candidate, i) for i, candidate in enumerate(grids)), key=lambda g: g[0] * g[1])
+    candidates = sorted(
+        (grid_candidate(candidate, f"{key}[{i}]") for i, candidate in enumerate(grids)), key=lambda g: g[0] * g[1]
+    )
     if not candidates:
-        raise SpecError("grids: expected at least one candidate [rows, columns]")
+        raise SpecError(f"{key}: expected at least one candidate [rows, columns]")
     trials = []
     for grid in candidates:
+        if before is not None:
+            before(grid)
         trial_spec = copy.deepcopy(spec)
         trial_spec["sensor"]["grid"] = list(grid)
+        trial_spec.get("design", {}).pop("grids", None)  # a trial is a design at its grid (and --write writes it so)
         try:
             problem, _ = problem_from_spec(trial_spec)
         except SpecError as error:

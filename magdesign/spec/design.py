@@ -402,6 +402,39 @@ def exact_levels(spec: dict) -> dict | None:
     return exact
 
 
+def grid_candidate(candidate, where: str) -> tuple[int, int]:
+    """A candidate chip grid [rows, columns] of whole numbers of 1 or more, as (rows, columns),
+    else a SpecError naming ``where``."""
+    if (
+        not isinstance(candidate, (list, tuple))
+        or len(candidate) != 2
+        or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in candidate)
+    ):
+        raise SpecError(f"{where}: expected [rows, columns], two whole numbers of 1 or more, got {echo(candidate)}")
+    return int(candidate[0]), int(candidate[1])
+
+
+def design_grids(spec: dict) -> tuple[tuple[int, int], ...] | None:
+    """The candidate chip grids of ``design.grids`` ((rows, columns) each, as written), or None
+    where the spec gives none: ``magdesign solve`` solves the design once per grid, fewest chips
+    first (:func:`magdesign.spec.fewest_chips`). A SpecError naming design.grids unless it is a
+    non-empty list of [rows, columns] on a skin whose chips sit on ``sensor.grid``."""
+    grids = spec.get("design", {}).get("grids")
+    if grids is None:
+        return None
+    if not isinstance(grids, list) or not grids:
+        raise SpecError(
+            f"design.grids: expected a list of candidate chip grids [[rows, columns], ...], got {echo(grids)}"
+        )
+    sensor = spec.get("sensor", {})
+    if spec.get("magnet", {}).get("shape") != "skin" or "grid" not in sensor or "chips" in sensor:
+        raise SpecError(
+            "design.grids: the candidate grids replace a skin's sensor.grid (magnet.shape = 'skin', its chips "
+            "placed by sensor.grid and sensor.pitch)"
+        )
+    return tuple(grid_candidate(candidate, f"design.grids[{i}]") for i, candidate in enumerate(grids))
+
+
 def problem_from_spec(spec: dict, *, fidelity: str | None = None):
     """Build (problem, scene) from a parsed spec with a [design] table.
 
@@ -426,7 +459,10 @@ def problem_from_spec(spec: dict, *, fidelity: str | None = None):
                 "load.normal: a design needs a sweep that presses harder than its first point (the "
                 f"press it is designed for); its largest normal load is {press:g} N above its first"
             )
-    check_keys("design", design, ("name", "variables", "targets", "limits", "objective", "report", "tolerances"))
+    check_keys(
+        "design", design, ("name", "variables", "targets", "limits", "objective", "report", "tolerances", "grids")
+    )
+    design_grids(spec)  # the candidate chip grids are read, and refused off a skin on a grid, by every command
     if not isinstance(design.get("name", ""), str):
         raise SpecError(f"design.name: expected the design's name (a string), got {echo(design['name'])}")
     known_parameters = parameters(scene)

@@ -34,6 +34,7 @@ KINDS = {
     "names": "a list of names",
     "integer": "a whole number",
     "integers": "a list of whole numbers",
+    "grids": "a list of [rows, columns] pairs of whole numbers",
     "bool": "true or false",
     "tables": "an array of tables, [[...]]",
     "quantity or table": "a quantity, or a table of the keys below it",
@@ -807,6 +808,13 @@ def _keys():
         Key("design.objective.maximize", "output", "the output to maximise", default=None),
         Key("design.objective.minimize", "output", "the output to minimise", default=None),
         Key("design.report.*", "unit", "a further output to show, in this unit", default=None),
+        Key(
+            "design.grids",
+            "grids",
+            "a skin's candidate sensor.grid values: magdesign solve solves the design at each, fewest chips "
+            "first, and reports the first that succeeds",
+            default=None,
+        ),
         Key(
             "design.tolerances.distribution",
             "choice",

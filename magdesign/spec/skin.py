@@ -37,6 +37,12 @@ from magdesign.units import SpecError, echo
 # The Hertz contact radius over the layer's thickness up to which a skin's half-space contact
 # patch holds to about 3 % (magdesign.scene.skin_scene): beyond it a spec warns.
 SKIN_CONTACT_RATIO = 0.5
+# The strain under the contact (SkinScene.contact_strain) above which a spec warns: the linear
+# layer is a neo-Hookean (or Mooney-Rivlin) elastomer's first order in the strain, and their
+# stresses part by about the strain itself. In uniaxial compression to the stretch l = 1 - e
+# the neo-Hookean's nominal stress mu (l - l^-2) is (l^-2 - l) / (3 e) - 1 above Hooke's
+# 3 mu e: 11.5 % at e = 0.1, beyond the few per cent of the model's other reaches.
+SKIN_STRAIN_LIMIT = 0.1
 # The Cramer-Rao bound of a contact's (x, y, Fn, F_x, F_y) needs 5 readings or more: two 3-axis chips.
 SKIN_MIN_CHIPS = 2
 
@@ -87,6 +93,7 @@ def check_skin_loads(scene, loads):
                 stacklevel=3,
             )
     check_contact_patch(scene, float(normal.max()))
+    check_contact_strain(scene, loads)
 
 
 def check_contact_patch(scene, force):
@@ -109,6 +116,50 @@ def check_contact_patch(scene, force):
             "smaller indenter.radius or a stiffer layer)"
         )
     warnings.warn(message, PlausibilityWarning, stacklevel=2)
+
+
+def neo_hookean_excess(strain: float) -> float:
+    """How far (-) a neo-Hookean elastomer's nominal stress in uniaxial compression by
+    ``strain`` e (-, 0 < e < 1) lies above Hooke's of the same initial modulus:
+    mu (l^-2 - l) / (3 mu e) - 1 at the stretch l = 1 - e (0.115 at e = 0.1)."""
+    stretch = 1.0 - strain
+    return (stretch**-2 - stretch) / (3.0 * strain) - 1.0
+
+
+def check_contact_strain(scene, loads):
+    """Warn (:class:`~magdesign.spec.checks.PlausibilityWarning`) where the strain under
+    the contact, :meth:`~magdesign.scene.skin_scene.SkinScene.contact_strain`, exceeds
+    SKIN_STRAIN_LIMIT at some point of ``loads`` (the sweep): the linear layer's stresses
+    are then off by about the strain itself. Names load.normal (load.shear_x / shear_y
+    where the shear's travel is the larger part), mechanics.shear_modulus and the indenter."""
+    strains = np.asarray(scene.contact_strain(loads.normal, loads.shear))
+    worst = int(np.argmax(strains))
+    strain = float(strains[worst])
+    if not strain > SKIN_STRAIN_LIMIT:
+        return
+    normal, shear = float(loads.normal[worst]), np.asarray(loads.shear[worst], dtype=float)
+    nu = float(scene.poisson_ratio)
+    # which travel dominates: the depth's 2 (1 - nu) Fn or the shear's (2 - nu) |F_t|
+    sheared = (2.0 - nu) * float(np.hypot(*shear)) > 2.0 * (1.0 - nu) * normal
+    key = ("load.shear_x" if abs(shear[0]) >= abs(shear[1]) else "load.shear_y") if sheared else "load.normal"
+    radius = float(scene.contact_radius(normal))
+    if scene.indenter == "flat":
+        measure, remedy = f"the flat punch's travel over its {radius * 1e3:.3g} mm radius", "a wider punch"
+    else:
+        measure = f"the sphere's travel over its {radius * 1e3:.3g} mm Hertz contact radius, about a / R"
+        remedy = "a larger sphere"
+    excess = f"{100 * neo_hookean_excess(min(strain, 0.5)):.0f} %"
+    excess = excess if strain < 0.5 else f"over {excess}"
+    warnings.warn(
+        f"{key}: at {normal:g} N (shear ({shear[0]:g}, {shear[1]:g}) N) the strain under the contact is "
+        f"{strain:.2g} ({measure}) on the {float(scene.shear_modulus) / 1e3:g} kPa layer (mechanics.shear_modulus): "
+        f"above {SKIN_STRAIN_LIMIT:g}, where a neo-Hookean elastomer's stress departs from the linear layer's by "
+        f"about the strain (in uniaxial compression by 11.5 % at {SKIN_STRAIN_LIMIT:g}, {excess} at {strain:.2g}), "
+        f"so its displacements and the outputs may be off by as much; a smaller force, a stiffer layer or {remedy} "
+        "(indenter.radius) lowers the strain (mechanics.thickness does not, while the patch is small against it)",
+        PlausibilityWarning,
+        stacklevel=2,  # at one place whoever builds the scene: the command says it once
+    )
 
 
 def _skin_chips(sensor):
@@ -201,7 +252,7 @@ def _check_pattern_nodes(key, counts, size, period):
             f"(magnet.period); the default puts {NODES_PER_PERIOD} in a period, and the field's error "
             "grows as the spacing squared",
             PlausibilityWarning,
-            stacklevel=4,
+            stacklevel=2,  # at one place whoever builds the scene: the command says it once
         )
 
 

@@ -2,13 +2,17 @@
 whose solve succeeds, with each candidate's status."""
 
 import copy
+import json
+import tomllib
 
 import jax.numpy as jnp
 import pytest
 from scene_helpers import example
 
+from magdesign.cli import main
 from magdesign.scene import loads_from_spec, outputs, scene_from_spec, with_parameters
 from magdesign.spec import SpecError, fewest_chips
+from magdesign.spec.design import spec_text
 from magdesign.units import mT
 
 
@@ -72,3 +76,66 @@ def test_the_fewest_chips_that_localise_to_a_target():
     achieved = outputs(scene, loads_from_spec(nine))
     assert float(achieved["localisation_worst"]) == pytest.approx(target, rel=1e-6)
     assert float(achieved["saturation_force"]) >= 5.0
+
+
+def _grids_spec(tmp_path, grids, spec=None, target="20 mN"):
+    """A design spec file of the grid skin (J0 in [5, 80] mT for a normal-force bound of
+    ``target``) with ``design.grids``."""
+    spec = grid_skin() if spec is None else spec
+    spec["design"] = {
+        "variables": {"magnet.polarization": {"lower": "5 mT", "upper": "80 mT"}},
+        "targets": {"force_resolution_normal": target},
+        "grids": grids,
+    }
+    path = tmp_path / "grids.toml"
+    path.write_text(spec_text(spec))
+    return str(path)
+
+
+def test_solve_with_candidate_grids_refuses_bad_input_and_says_when_no_grid_succeeds(tmp_path, capsys):
+    """design.grids from the command line: a lone chip is refused (three readings cannot fix a
+    contact's five unknowns) without a solve, so no grid succeeds: exit 3 and each trial's
+    status; a bad candidate, a skin whose chips are listed, and sweep and tolerance (which
+    take the spec's own grid) are bad specs naming the key."""
+    assert main(["solve", _grids_spec(tmp_path, [[1, 1]]), "--json"]) == 3
+    document = json.loads(capsys.readouterr().out)
+    assert document["status"] == "no_grid_succeeded" and document["grid"] is None and document["parameters"] == {}
+    (trial,) = document["trials"]
+    assert trial["grid"] == [1, 1] and trial["status"] == "refused" and "at least 2 chips" in trial["reason"]
+    assert main(["solve", _grids_spec(tmp_path, [[1, 1]])]) == 3
+    out = capsys.readouterr().out
+    assert "[1, 1]       1      refused" in out and "no candidate grid succeeded" in out
+    for grids, key in (([[2, 2], [0, 3]], "design.grids[1]"), ([], "design.grids"), ("2x2", "design.grids")):
+        assert main(["solve", _grids_spec(tmp_path, grids)]) == 2
+        assert capsys.readouterr().err.startswith(f"magdesign solve: {key}:")
+    listed = example("skin")
+    listed["magnet"]["resolution"] = [20, 20, 4]
+    assert main(["solve", _grids_spec(tmp_path, [[2, 2]], listed)]) == 2
+    assert "design.grids: the candidate grids replace a skin's sensor.grid" in capsys.readouterr().err
+    path = _grids_spec(tmp_path, [[2, 2]])
+    assert main(["sweep", path, "--over", "sensor.pitch=6mm:8mm:2"]) == 2
+    assert capsys.readouterr().err.startswith("magdesign sweep: design.grids: magdesign sweep takes the spec's own")
+    assert main(["tolerance", path]) == 2
+    assert capsys.readouterr().err.startswith("magdesign tolerance: design.grids:")
+    assert main(["solve", path, "--accuracy", "1%"]) == 2
+    assert "--accuracy: not with design.grids" in capsys.readouterr().err
+
+
+@pytest.mark.slow  # compiles the 2 x 2 grid's outputs, its design and the finer level's estimate: minutes
+def test_solve_with_candidate_grids_reports_the_fewest_chips_that_succeed(tmp_path, capsys):
+    """The normal-force bound scales as 1 / J0 (the readings are J0 times the layer's unit field
+    plus a constant background): a target of half the 2 x 2 grid's bound at 20 mT needs 40 mT.
+    The lone chip is refused, the 2 x 2 grid succeeds there, and the 3 x 3 grid is never tried."""
+    spec = grid_skin((2, 2))
+    bound = float(outputs(scene_from_spec(spec), loads_from_spec(spec))["force_resolution_normal"])
+    path = _grids_spec(tmp_path, [[3, 3], [1, 1], [2, 2]], target=f"{bound / 2!r} N")
+    written = tmp_path / "solved.toml"
+    assert main(["solve", path, "--json", "--write", str(written)]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert document["status"] == "successful" and document["grid"] == [2, 2] and document["chips"] == 4
+    assert [(t["grid"], t["status"]) for t in document["trials"]] == [([1, 1], "refused"), ([2, 2], "successful")]
+    assert document["parameters"]["magnet.polarization"] == pytest.approx(40 * mT, rel=1e-6)
+    assert document["targets"]["force_resolution_normal"]["achieved"] == pytest.approx(bound / 2, rel=1e-6)
+    # the written answer is a plain design at the found grid
+    solved = tomllib.loads(written.read_text())
+    assert solved["sensor"]["grid"] == [2, 2] and "grids" not in solved["design"]

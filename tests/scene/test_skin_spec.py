@@ -155,9 +155,65 @@ def test_a_contact_patch_wider_than_the_model_holds_warns_naming_the_load():
 
     with pytest.warns(PlausibilityWarning, match=r"^load.normal: at 5 N .* times the 2 mm skin"):
         scene_from_spec(skin(edit))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene_from_spec(skin())  # the example's 0.9 mm patch under 0.2 N: no patch warning
+    assert not [w for w in caught if "Hertz contact radius is" in str(w.message)]
+
+
+def _hertz_radius(force, sphere=2e-3, shear_modulus=100e3, nu=0.49):
+    """Hertz's contact radius (m) of a rigid sphere on the half-space (Johnson 1985, ch. 4)."""
+    return (3.0 * force * sphere * (1.0 - nu) / (8.0 * shear_modulus)) ** (1.0 / 3.0)
+
+
+def test_a_press_past_the_linear_layers_strain_warns_once_naming_force_and_modulus():
+    """The strain under a sphere's contact is its depth over its radius, a^2 / R / a = a / R
+    (Hertz); a neo-Hookean stress departs from Hooke's by 11.5 % at 10 % uniaxial compression:
+    mu (l - l^-2) against 3 mu (l - 1) at l = 0.9."""
+    stretch = 0.9
+    assert abs((stretch - stretch**-2) / (3.0 * (stretch - 1.0)) - 1.115) < 1e-3
+    # the example without its shear: 0.2 N on a 2 mm sphere, a / R = 0.915 mm / 2 mm = 0.46
+    strain = _hertz_radius(0.2) / 2e-3
+    assert abs(strain - 0.457) < 1e-3
+
+    def pressed(force, shear=0.0):
+        def edit(spec):
+            spec["load"]["normal"] = ["0 N", f"{force} N"]
+            spec["load"]["shear_x"] = ["0 N", f"{shear} N"]
+
+        return skin(edit)
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene_from_spec(pressed(0.2))
+    strained = [str(w.message) for w in caught if "strain under the contact" in str(w.message)]
+    assert len(strained) == 1 and strained[0].startswith("load.normal: at 0.2 N (shear (0, 0) N) the strain under ")
+    assert f" is {strain:.2g} " in strained[0] and "mechanics.shear_modulus" in strained[0]
+    assert "indenter.radius" in strained[0] and "11.5 %" in strained[0]
+    # a / R = 0.09 and 0.11 either side of the limit: F = (a / R)^3 8 G R^2 / (3 (1 - nu))
+    below, above = (ratio**3 * 8.0 * 100e3 * 2e-3**2 / (3.0 * 0.51) for ratio in (0.09, 0.11))
+    assert abs(_hertz_radius(below) / 2e-3 - 0.09) < 1e-12
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        scene_from_spec(skin())  # the example's 0.9 mm patch under 0.2 N: no warning
+        scene_from_spec(pressed(below))
+    with pytest.warns(PlausibilityWarning, match=r"^load.normal: .* strain under the contact is 0.11 "):
+        scene_from_spec(pressed(above))
+
+    # a flat punch of 1 mm radius sheared by 0.05 N over 1 mN: its face travels
+    # (2 - nu) F_t / (8 G a) = 0.0944 mm along x (Johnson 1985, ch. 7), and 0.0013 mm down
+    # (F_n (1 - nu) / (4 G a)): a strain of 0.0944
+    def punched(shear):
+        spec = pressed(0.001, shear)
+        spec["indenter"] = {"shape": "flat", "radius": "1 mm"}
+        return spec
+
+    travel = np.hypot(1.51 * 0.05, 2 * 0.51 * 0.001) / (8 * 100e3 * 1e-3**2)
+    assert abs(travel - 0.0944) < 1e-4
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene_from_spec(punched(0.05))
+    with pytest.warns(PlausibilityWarning, match=r"^load.shear_x: .* is 0.11 \(the flat punch's travel"):
+        scene_from_spec(punched(0.06))  # 0.113
 
 
 def test_a_contact_or_map_point_near_the_side_warns():

@@ -124,9 +124,19 @@ def _specs_with_every_key():
     saturating["pole"]["saturation"] = "1 T"
     loads = _example("gmr_inductor")
     loads["load"].update(shear_y=["0 N", "1 N"], contact_x=["0 mm", "1 mm"], contact_y=["0 mm", "-1 mm"])
+    # a skin's design over candidate chip grids
+    grids = _example("skin")
+    grids["sensor"].pop("chips")
+    grids["sensor"].update(grid=[2, 2], pitch="8 mm")
+    grids["design"] = {
+        "variables": {"magnet.polarization": {"lower": "5 mT", "upper": "80 mT"}},
+        "targets": {"force_resolution_normal": "20 mN"},
+        "grids": [[1, 2], [2, 2]],
+    }
     return {
         "every scene key": every,
         "every design key": design,
+        "a skin's candidate grids": grids,
         "finite film": film,
         "reduced pole": reduced,
         "saturating pole": saturating,
@@ -156,6 +166,8 @@ def _design_keys_given(spec):
             given |= {f"design.objective.{key}" for key in entries}
         elif sub == "report":
             given |= {"design.report.*"} if entries else set()
+        elif sub == "grids":
+            given.add("design.grids")
         elif sub == "tolerances":
             for name, entry in entries.items():
                 given.add(f"design.tolerances.{name}" if name in _NAMED_TOLERANCES else "design.tolerances.*")
