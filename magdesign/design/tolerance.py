@@ -32,6 +32,7 @@ axis: the design solve keeps the cheap form, whose answer is the same.
 
 import math
 import time
+import warnings
 
 import equinox as eqx
 import jax
@@ -47,6 +48,7 @@ from magdesign.design.problem import Limit, Problem
 from magdesign.design.report import DesignResult, format_quantity
 from magdesign.design.solve import solve
 from magdesign.scene import AbstractScene, outputs, parameters, with_parameters
+from magdesign.spec.sizes import SizeWarning
 from magdesign.spec.tolerance import AXES, EFFECT_INPUTS, ToleranceProblem, check_spreads
 from magdesign.spec.tolerance import tolerance_problem_from_spec as tolerance_problem_from_spec
 from magdesign.units import convert
@@ -277,6 +279,33 @@ def _groups(labels, contributions):
     return {label: math.sqrt(total) for label, total in sums.items()}
 
 
+def _draw(tp, scene, key, samples, chunk, names, bar):
+    """({name: (samples,)}, (sum_u, sum_uu, sum_o, sum_ou, used)): the samples' outputs,
+    drawn in batches of at most ``chunk``, and the sums of the regression slopes over the
+    samples whose outputs are all finite."""
+    chunks = -(-samples // chunk)
+    size = -(-samples // chunks)
+    dimension = len(tp.unit_std)
+    drawn = {name: [] for name in names}
+    sum_u, sum_uu, sum_o, sum_ou, used = np.zeros(dimension), np.zeros(dimension), {}, {}, 0
+    for index in range(chunks):
+        count = min(size, samples - index * size)
+        u, result = _chunk(tp, scene, jax.random.fold_in(key, index), size, names)
+        u = np.asarray(u)[:count]
+        result = {name: np.asarray(value)[:count] for name, value in result.items()}
+        for name in names:
+            drawn[name].append(result[name])
+        finite = np.all([np.isfinite(result[name]) for name in names], axis=0)
+        u, used = u[finite], used + int(finite.sum())
+        sum_u += u.sum(0)
+        sum_uu += (u * u).sum(0)
+        for name in names:
+            sum_o[name] = sum_o.get(name, 0.0) + result[name][finite].sum()
+            sum_ou[name] = sum_ou.get(name, 0.0) + result[name][finite] @ u
+        bar.update(count)
+    return {name: np.concatenate(parts) for name, parts in drawn.items()}, (sum_u, sum_uu, sum_o, sum_ou, used)
+
+
 def monte_carlo(
     tp: ToleranceProblem,
     values: dict,
@@ -292,8 +321,10 @@ def monte_carlo(
         tp: the design and its tolerances (:func:`~magdesign.spec.tolerance.tolerance_problem_from_spec`).
         values: the design's variables (e.g. a solve's ``parameters``).
         samples: how many perturbed scenes to simulate (>= 1).
-        seed: the PRNG seed (jax.random); a run is reproducible for the same seed and chunk.
-        chunk: samples per compiled batch, which bounds memory.
+        seed: the PRNG seed (jax.random); a run is reproducible for the same seed and chunk
+            (where its batches fit memory).
+        chunk: samples per compiled batch, which bounds memory; a batch that runs out of
+            this machine's memory is retried at half its size (a line on stderr says so).
         progress: a progress bar on stderr: True, False, or None (when stderr is a
             terminal and the run takes more than a second).
 
@@ -308,31 +339,23 @@ def monte_carlo(
     check_spreads(tp.inputs, scene)
     began = time.perf_counter()
     nominal, parts = _first_order(tp, scene)
-    chunks = -(-samples // chunk)
-    size = -(-samples // chunks)
-    dimension = len(tp.unit_std)
     key = jax.random.key(seed)
-    drawn = {name: [] for name in names}
-    sum_u, sum_uu, sum_o, sum_ou, used = np.zeros(dimension), np.zeros(dimension), {}, {}, 0
     bar = tqdm(total=samples, unit="sample", delay=1.0, disable=None if progress is None else not progress, leave=False)
-    for index in range(chunks):
-        count = min(size, samples - index * size)
-        u, result = _chunk(tp, scene, jax.random.fold_in(key, index), size, tuple(names))
-        u = np.asarray(u)[:count]
-        result = {name: np.asarray(value)[:count] for name, value in result.items()}
-        for name in names:
-            drawn[name].append(result[name])
-        # sums for the regression slopes, over the samples whose outputs are all finite
-        finite = np.all([np.isfinite(result[name]) for name in names], axis=0)
-        u, used = u[finite], used + int(finite.sum())
-        sum_u += u.sum(0)
-        sum_uu += (u * u).sum(0)
-        for name in names:
-            sum_o[name] = sum_o.get(name, 0.0) + result[name][finite].sum()
-            sum_ou[name] = sum_ou.get(name, 0.0) + result[name][finite] @ u
-        bar.update(count)
+    while True:
+        try:
+            drawn, (sum_u, sum_uu, sum_o, sum_ou, used) = _draw(tp, scene, key, samples, chunk, tuple(names), bar)
+            break
+        except jax.errors.JaxRuntimeError as error:
+            size = -(-samples // -(-samples // chunk))
+            if "RESOURCE_EXHAUSTED" not in str(error) or size == 1:
+                raise
+            # a batch that does not fit this machine's memory: the same draws' scheme in
+            # batches of half the size (the samples then differ from a run that fitted)
+            chunk = size // 2
+            bar.reset()
+            message = f"monte_carlo: a batch of {size} samples ran out of this machine's memory; batches of {chunk}"
+            warnings.warn(message, SizeWarning, stacklevel=2)
     bar.close()
-    drawn = {name: np.concatenate(parts_) for name, parts_ in drawn.items()}
     seconds = time.perf_counter() - began
 
     bounds = _bounds(tp)

@@ -218,3 +218,34 @@ def test_a_spread_is_checked_again_about_the_solved_design():
     tp = tolerance_problem_from_spec(spec)
     with pytest.raises(SpecError, match=r"design.tolerances.mechanics.thickness \(about the design's"):
         monte_carlo(tp, POINT, samples=10)
+
+
+def test_a_batch_out_of_memory_is_retried_at_half_its_size(gaussian_br, monkeypatch):
+    """A batch above 16 samples stands for one that does not fit memory (XLA's own error):
+    the run goes on in batches of 15 (30 samples: 2 x 15 after 1 x 30 failed), says so, and
+    draws what a run asked for batches of 15 draws."""
+    import jax
+
+    from magdesign.design import tolerance
+    from magdesign.spec.sizes import SizeWarning
+
+    real = tolerance._chunk
+
+    def chunk(tp, scene, key, count, names):
+        if count > 16:
+            raise jax.errors.JaxRuntimeError(f"RESOURCE_EXHAUSTED: Out of memory allocating {count} bytes.")
+        return real(tp, scene, key, count, names)
+
+    monkeypatch.setattr(tolerance, "_chunk", chunk)
+    with pytest.warns(SizeWarning, match="a batch of 30 samples ran out of this machine's memory; batches of 15"):
+        halved = monte_carlo(gaussian_br, POINT, samples=30, seed=3, chunk=64, progress=False)
+    asked = monte_carlo(gaussian_br, POINT, samples=30, seed=3, chunk=15, progress=False)
+    for name, values in asked.values.items():
+        np.testing.assert_array_equal(halved.values[name], values)
+
+    def failing(tp, scene, key, count, names):
+        raise jax.errors.JaxRuntimeError("INTERNAL: something else")
+
+    monkeypatch.setattr(tolerance, "_chunk", failing)  # another runtime error is not retried
+    with pytest.raises(jax.errors.JaxRuntimeError, match="INTERNAL"):
+        monte_carlo(gaussian_br, POINT, samples=30, seed=3, chunk=64, progress=False)
