@@ -374,7 +374,8 @@ class SkinScene(AbstractScene):
         - the sphere's Hertz patch: delta = 3 Fn (1 - nu) / (8 G a) = a^2 / R, so delta / a =
           a / R, the slope of the pressed surface at the patch's edge, the largest gradient
           of its displacement; the traction of Hertz's shape moves the centre by
-          u_t = 3 |F_t| (2 - nu) / (16 G a);
+          u_t = 3 |F_t| (2 - nu) / (16 G a) (a slipping contact's; where the patch sticks,
+          the centre moves two thirds of it: Johnson, sec. 7.2);
         - the flat punch: delta = Fn (1 - nu) / (4 G a), u_t = |F_t| (2 - nu) / (8 G a)
           (the punch's face moves as one), the mean gradient under it (its edge is singular).
 

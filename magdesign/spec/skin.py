@@ -11,6 +11,7 @@ import numpy as np
 from magdesign.fields.layer_field import finer
 from magdesign.scene.pose import grid_positions
 from magdesign.scene.skin_scene import (
+    CONTACT_FORCE_FLOOR,
     FIELD_MODELS,
     INDENTERS,
     NODES_PER_PERIOD,
@@ -132,36 +133,41 @@ def neo_hookean_excess(strain: float) -> float:
 
 
 def check_contact_strain(scene, loads):
-    """Warn (:class:`~magdesign.spec.checks.PlausibilityWarning`) where the strain under
-    the contact, :meth:`~magdesign.scene.skin_scene.SkinScene.contact_strain`, exceeds
-    SKIN_STRAIN_LIMIT at some point of ``loads`` (the sweep): the linear layer's stresses
-    are then off by about the strain itself. Names load.normal (load.shear_x / shear_y
-    where the shear's travel is the larger part), mechanics.shear_modulus and the indenter."""
-    strains = np.asarray(scene.contact_strain(loads.normal, loads.shear))
-    worst = int(np.argmax(strains))
-    strain = float(strains[worst])
-    if not strain > SKIN_STRAIN_LIMIT:
-        return
-    normal, shear = float(loads.normal[worst]), np.asarray(loads.shear[worst], dtype=float)
+    """Warn (:class:`~magdesign.spec.checks.PlausibilityWarning`) where the largest strain
+    in the layer under the contact exceeds SKIN_STRAIN_LIMIT at some point of ``loads`` (the
+    sweep) with a press of CONTACT_FORCE_FLOOR or more: the linear layer's stresses are then
+    off by about the strain itself. The strain is
+    :meth:`~magdesign.scene.skin_scene.SkinScene.contact_strain`, the patch's travel over
+    its radius, times HERTZ_PEAK_STRAIN for a sphere whose depth is the larger travel.
+    Names load.normal (load.shear_x / shear_y where the shear's travel is the larger part),
+    mechanics.shear_modulus and the indenter."""
+    normals, shears = np.asarray(loads.normal, dtype=float), np.asarray(loads.shear, dtype=float)
+    travels = np.asarray(scene.contact_strain(normals, shears))
     nu = float(scene.poisson_ratio)
     # which travel dominates: the depth's 2 (1 - nu) Fn or the shear's (2 - nu) |F_t|
-    sheared = (2.0 - nu) * float(np.hypot(*shear)) > 2.0 * (1.0 - nu) * normal
+    sheared = (2.0 - nu) * np.hypot(shears[..., 0], shears[..., 1]) > 2.0 * (1.0 - nu) * normals
+    hertz = (scene.indenter != "flat") & ~sheared
+    insides = np.where(normals >= CONTACT_FORCE_FLOOR, np.where(hertz, HERTZ_PEAK_STRAIN, 1.0) * travels, 0.0)
+    worst = int(np.argmax(insides))
+    inside = float(insides[worst])
+    if not inside > SKIN_STRAIN_LIMIT:
+        return
+    strain = float(travels[worst])
+    normal, shear, sheared = float(normals[worst]), shears[worst], bool(sheared[worst])
     key = ("load.shear_x" if abs(shear[0]) >= abs(shear[1]) else "load.shear_y") if sheared else "load.normal"
     radius = float(scene.contact_radius(normal))
-    inside = strain
-    if scene.indenter == "flat":
-        measure, remedy = f"the flat punch's travel over its {radius * 1e3:.3g} mm radius", "a wider punch"
+    travel = f"the {'flat punch' if scene.indenter == 'flat' else 'sphere'}'s travel over its {radius * 1e3:.3g} mm "
+    travel += "radius" if scene.indenter == "flat" else "Hertz contact radius"
+    if scene.indenter != "flat" and not sheared:
+        measure = f"{HERTZ_PEAK_STRAIN:g} x {travel}, a / R = {strain:.2g}: Hertz's stresses inside"
     else:
-        measure = f"the sphere's travel over its {radius * 1e3:.3g} mm Hertz contact radius, about a / R"
-        remedy = "a larger sphere"
-        if not sheared:
-            inside = HERTZ_PEAK_STRAIN * strain
-            measure += f"; the largest strain inside, Hertz's, is about {inside:.2g}"
+        measure = travel
+    remedy = "a wider punch" if scene.indenter == "flat" else "a larger sphere"
     excess = f"{100 * neo_hookean_excess(min(inside, 0.5)):.0f} %"
     excess = excess if inside < 0.5 else f"over {excess}"
     warnings.warn(
-        f"{key}: at {normal:g} N (shear ({shear[0]:g}, {shear[1]:g}) N) the strain under the contact is "
-        f"{strain:.2g} ({measure}) on the {float(scene.shear_modulus) / 1e3:g} kPa layer (mechanics.shear_modulus): "
+        f"{key}: at {normal:g} N (shear ({shear[0]:g}, {shear[1]:g}) N) the largest strain under the contact is "
+        f"{inside:.2g} ({measure}) on the {float(scene.shear_modulus) / 1e3:g} kPa layer (mechanics.shear_modulus): "
         f"above {SKIN_STRAIN_LIMIT:g}, where a neo-Hookean elastomer's stress departs from the linear layer's by "
         f"about the strain (in uniaxial compression by 11.5 % at {SKIN_STRAIN_LIMIT:g}, {excess} at {inside:.2g}), "
         f"so its displacements and the outputs may be off by as much; a smaller force, a stiffer layer or {remedy} "

@@ -187,8 +187,10 @@ def test_a_press_past_the_linear_layers_strain_warns_once_naming_force_and_modul
         warnings.simplefilter("always")
         scene_from_spec(pressed(0.2))
     strained = [str(w.message) for w in caught if "strain under the contact" in str(w.message)]
-    assert len(strained) == 1 and strained[0].startswith("load.normal: at 0.2 N (shear (0, 0) N) the strain under ")
-    assert f" is {strain:.2g} " in strained[0] and "mechanics.shear_modulus" in strained[0]
+    assert len(strained) == 1 and strained[0].startswith(
+        "load.normal: at 0.2 N (shear (0, 0) N) the largest strain under "
+    )
+    assert f"a / R = {strain:.2g}" in strained[0] and "mechanics.shear_modulus" in strained[0]
     assert "indenter.radius" in strained[0] and "11.5 %" in strained[0]
     # the largest strain inside: Hertz's stresses on the axis (Johnson 1985, eq. 3.45, nu =
     # 0.5), p0 = 8 G a / (pi R), as a uniaxial strain (sigma_r - sigma_z) / (3 G)
@@ -197,10 +199,11 @@ def test_a_press_past_the_linear_layers_strain_warns_once_naming_force_and_modul
     radial = -1.5 * (1.0 - depth * np.arctan(1.0 / depth)) + 0.5 / (1.0 + depth**2)
     peak = float(np.max(radial - axial)) * 8.0 / (3.0 * np.pi)  # per a / R
     assert abs(peak - 0.452) < 1e-3
-    assert f"the largest strain inside, Hertz's, is about {peak * strain:.2g}" in strained[0]
-    # a / R = 0.09 and 0.11 either side of the limit: F = (a / R)^3 8 G R^2 / (3 (1 - nu))
-    below, above = (ratio**3 * 8.0 * 100e3 * 2e-3**2 / (3.0 * 0.51) for ratio in (0.09, 0.11))
-    assert abs(_hertz_radius(below) / 2e-3 - 0.09) < 1e-12
+    assert f"the contact is {peak * strain:.2g} (" in strained[0]
+    # a / R = 0.20 and 0.24, a largest strain inside of 0.090 and 0.108, either side of the
+    # limit: F = (a / R)^3 8 G R^2 / (3 (1 - nu))
+    below, above = (ratio**3 * 8.0 * 100e3 * 2e-3**2 / (3.0 * 0.51) for ratio in (0.20, 0.24))
+    assert abs(_hertz_radius(below) / 2e-3 - 0.20) < 1e-12
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         scene_from_spec(pressed(below))
