@@ -95,6 +95,7 @@ Contact of a rigid sphere of radius R, two limits:
 """
 
 import dataclasses
+import itertools
 import math
 
 import equinox as eqx
@@ -481,7 +482,10 @@ def layer_displacement_grid(
     if len(grid.refine) != nz:
         raise ValueError(f"grid.refine must have one entry per level ({nz}), got {len(grid.refine)}")
     planes = []
-    for height, (rx, ry) in zip(heights, grid.refine):
+    # the levels of one lattice (consecutive equal refine, every level of the linear field's
+    # band-limited lattice) are one batch of heights: one program for them, whatever their count
+    for (rx, ry), run in itertools.groupby(zip(heights, grid.refine), key=lambda level: level[1]):
+        run_heights = np.array([height for height, _ in run])
         # the lattice |m_x| <= (r_x P_x - 1) / 2 (an even count's unpaired -M dropped) by
         # 0 <= m_y <= (r_y P_y - 1) / 2: the field is real, so the modes -m are the conjugates
         # of m, and the half m_y > 0 counts twice in the real part of the sum. Along y it is
@@ -497,10 +501,10 @@ def layer_displacement_grid(
         zero = (mx[:, None] == 0) & (my[None, :] == 0)
         k = jnp.sqrt(jnp.where(zero, (ZERO_MODE_KH / h) ** 2, kx * kx + ky * ky))
         ex, ey = jnp.where(zero, 1.0, kx / k), jnp.where(zero, 0.0, ky / k)
-        z = jnp.reshape(height * h, (1, 1))
+        z = jnp.asarray(run_heights)[:, None] * h  # (N, 1), N the run's levels
         kernels, slopes = jax.jvp(lambda zz: _kernels(k.ravel(), zz, layer), (z,), (jnp.ones_like(z),))
-        U_L, W_L, U_z, W_z, V_T = (f.reshape(k.shape) for f in kernels)
-        dU_L, _, dU_z, _, dV_T = (f.reshape(k.shape) for f in slopes)
+        U_L, W_L, U_z, W_z, V_T = (f.reshape((-1, *k.shape)) for f in kernels)
+        dU_L, _, dU_z, _, dV_T = (f.reshape((-1, *k.shape)) for f in slopes)
         # the load's transform at the lattice, shifted to the load's centre, per unit area of a cell
         phase = jnp.exp(1j * kx1 * start[0])[:, None] * jnp.exp(1j * ky1 * start[1])[None, :]
         unit = load_transform(load.profile, k * load.radius) * phase / (side[0] * side[1])
@@ -511,12 +515,12 @@ def layer_displacement_grid(
         ux, uy, uz = ex * u_l - ey * u_t, ey * u_l + ex * u_t, -1j * W_L * t_l + W_z * t_z
         dux, duy = ex * du_l - ey * du_t, ey * du_l + ex * du_t
         curl = (1j * ky * uz - duy, dux - 1j * kx * uz, 1j * (kx * uy - ky * ux))
-        spectrum = jnp.stack([ux, uy, uz, *curl]) * weights
+        spectrum = jnp.stack([ux, uy, uz, *curl]) * weights  # (6, N, r_x P_x, r_y P_y / 2 padded)
         # sampled at the cells only, the lattice folds onto the cell grid's own (period P)
-        folded = spectrum.reshape(6, rx, px, -(-ry // 2), py).sum(axis=(1, 3))
-        folded = jnp.roll(folded, mx[0], axis=1)
-        planes.append(jnp.fft.ifft2(folded).real[:, :nx, :ny])
-    fields = jnp.stack(planes, axis=-1)  # (6, n_x, n_y, n_z)
+        folded = spectrum.reshape(6, -1, rx, px, -(-ry // 2), py).sum(axis=(2, 4))
+        folded = jnp.roll(folded, mx[0], axis=2)
+        planes.append(jnp.fft.ifft2(folded).real[..., :nx, :ny])
+    fields = jnp.moveaxis(jnp.concatenate(planes, axis=1), 1, -1)  # (6, n_x, n_y, n_z)
     return jnp.moveaxis(fields[:3], 0, -1), 0.5 * jnp.moveaxis(fields[3:], 0, -1)
 
 

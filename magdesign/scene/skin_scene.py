@@ -536,11 +536,14 @@ class SkinScene(AbstractScene):
 
         start = jnp.clip(jax.lax.stop_gradient(start), CONTACT_FORCE_FLOOR, SATURATION_FORCE_CAP)
         _, force, _ = jax.lax.while_loop(moving, secant, (0, start, jnp.asarray(jnp.inf)))
-        # the binding axis at the answer, and its slope there, held fixed
-        values, slopes = jax.jvp(lambda f: fractions(held, f), (force,), (jnp.ones(()),))
+        # the binding axis at the answer, and its slope there, held fixed: one evaluation of
+        # the readings gives the Newton step's values (their derivative the answer's) and,
+        # held, the slopes and the axis
+        current, slopes = jax.jvp(lambda f: fractions(self, f, contact), (force,), (jnp.ones(()),))
+        values, slopes = jax.lax.stop_gradient(current), jax.lax.stop_gradient(slopes)
         axis = jnp.argmin(first_crossings(rest, (values - rest) / force))
         bound = jnp.sign(values[axis])
-        newton = force - safe_div(fractions(self, force, contact)[axis] - bound, slopes[axis])
+        newton = force - safe_div(current[axis] - bound, slopes[axis])
         return jnp.where(jnp.max(jnp.abs(rest)) >= 1.0, 0.0, jnp.where(force >= SATURATION_FORCE_CAP, force, newton))
 
     def saturation_force(self, loads: Loads) -> Float[Array, ""]:

@@ -10,6 +10,8 @@
   below with a shear-free top.
 """
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -553,3 +555,57 @@ def test_spectral_grid_follows_the_layer():
     assert grid.refine == ((2, 2), (3, 3), (4, 4), (12, 12))
     with pytest.raises(ValueError, match="concrete"):
         jax.jit(lambda h: spectral_grid(size=(20e-3, 10e-3), thickness=h, cells=(16, 8, 4)).periods[0])(2e-3)
+
+
+def _batch_case():
+    """A 12 x 10 mm, 2 mm layer cut 8 x 6 in-plane, an off-centre Hertz press with shear."""
+    size, h = np.array([12e-3, 10e-3]), 2e-3
+    layer = ElasticLayer(thickness=h, shear_modulus=MU, poisson_ratio=0.49)
+    load = _load("hertz", fn=0.2, ft=(0.05, -0.02), centre=(1e-3, 0.5e-3), radius=0.7e-3)
+    return size, h, layer, load
+
+
+@pytest.mark.slow  # the batch and each level run op by op: 9 to 11 s of CPU
+def test_the_levels_of_one_lattice_are_one_batch():
+    """Levels that share a lattice (consecutive equal refine: every level of the skin's linear
+    field) are computed as one batch of heights: each level's displacement and rotation are
+    those of that level alone, on a grid that mixes lattices."""
+    size, h, layer, load = _batch_case()
+    cells = (8, 6, 4)
+    refine, levels = ((1, 1), (1, 1), (2, 3), (1, 1)), (0.1, 0.4, 0.6, 0.9)
+    grid = dataclasses.replace(spectral_grid(size=size, thickness=h, cells=cells), refine=refine)
+    u, rotation = layer_displacement_grid(layer=layer, load=load, size=size, cells=cells, grid=grid, levels=levels)
+    for i, (level, lattice) in enumerate(zip(levels, refine)):
+        alone = layer_displacement_grid(
+            layer=layer,
+            load=load,
+            size=size,
+            cells=(*cells[:2], 1),
+            grid=dataclasses.replace(grid, refine=(lattice,)),
+            levels=(level,),
+        )
+        np.testing.assert_allclose(u[:, :, i], alone[0][:, :, 0], rtol=1e-12, atol=1e-12 * np.max(np.abs(alone[0])))
+        np.testing.assert_allclose(
+            rotation[:, :, i], alone[1][:, :, 0], rtol=1e-12, atol=1e-12 * np.max(np.abs(alone[1]))
+        )
+
+
+def test_a_batch_of_levels_is_one_program_whatever_their_count():
+    """The traced program of 8 levels on one lattice has as many operations as that of 2:
+    its compile time does not grow with the skin's Gauss nodes."""
+    size, h, layer, _ = _batch_case()
+
+    def operations(nodes):
+        """The count of operations in the program of ``nodes`` levels on one lattice."""
+        grid = dataclasses.replace(spectral_grid(size=size, thickness=h, cells=(8, 6, nodes)), refine=((1, 1),) * nodes)
+        heights = tuple((np.arange(nodes) + 0.5) / nodes)
+
+        def fields(force):
+            pressed = _load("hertz", fn=force, ft=(0.05, -0.02), centre=(1e-3, 0.5e-3), radius=0.7e-3)
+            return layer_displacement_grid(
+                layer=layer, load=pressed, size=size, cells=(8, 6, nodes), grid=grid, levels=heights
+            )
+
+        return len(jax.make_jaxpr(fields)(0.2).eqns)
+
+    assert operations(8) == operations(2)

@@ -41,12 +41,22 @@ def test_each_listed_chip_is_a_parameter_and_a_design_moves_it():
     moved = with_parameters(scene, {"sensor.chips[1][0]": 12e-3, "sensor.chips[3][1]": 7e-3})
     chips = [[0.0, 0.0], [0.012, 0.0], [-0.01, 0.0], [0.0, 0.007], [0.0, -0.01]]
     np.testing.assert_allclose(moved.chip_positions(), chips, atol=1e-15)
-    np.testing.assert_allclose(moved.readings_at(jnp.zeros(5)), block_field(chips), rtol=1e-9, atol=1e-15)
+    # one compiled program (the readings at rest and their derivative along chip 1's x) for
+    # both checks: the readings' operations one by one take longer than compiling them
+    reading = jax.jit(
+        lambda x, y: jax.jvp(
+            lambda xx: with_parameters(scene, {"sensor.chips[1][0]": xx, "sensor.chips[3][1]": y}).readings_at(
+                jnp.zeros(5)
+            ),
+            (x,),
+            (jnp.ones(()),),
+        )
+    )
+    readings, _ = reading(jnp.asarray(12e-3), jnp.asarray(7e-3))
+    np.testing.assert_allclose(readings, block_field(chips), rtol=1e-9, atol=1e-15)
     # the derivative of a chip's reading along its x against magpylib's central difference
     step = 1e-6
-    slope = jax.jacfwd(lambda x: with_parameters(scene, {"sensor.chips[1][0]": x}).readings_at(jnp.zeros(5))[1])(
-        jnp.asarray(0.01)
-    )
+    slope = reading(jnp.asarray(0.01), jnp.asarray(0.01))[1][1]
     ends = [block_field([[0.01 + sign * step, 0.0]])[0] for sign in (1, -1)]
     np.testing.assert_allclose(slope, (ends[0] - ends[1]) / (2 * step), rtol=1e-6, atol=1e-6)
     # a solved chip's position is written back where the spec states it, in its unit
@@ -67,8 +77,11 @@ def test_a_grid_is_its_unit_offsets_times_the_pitch_parameter():
     np.testing.assert_allclose(wider.map_points(), [[0.0, 0.0]], atol=1e-15)
 
 
-@pytest.mark.slow  # the derivative of the outputs' Jacobians through the layer: minutes to compile
+@pytest.mark.slow  # the derivative of the outputs' Jacobians through the layer: a minute to compile
 def test_the_outputs_derivative_in_the_pitch_matches_a_central_difference():
+    """Forward mode, as a design takes its derivatives (magdesign.design's jets): one
+    compiled program gives the outputs and their derivative, at the pitch and at the
+    central difference's two ends."""
     spec = grid_skin()
     scene, loads = scene_from_spec(spec), loads_from_spec(spec)
     names = ("localisation_median", "force_resolution_normal")
@@ -78,9 +91,10 @@ def test_the_outputs_derivative_in_the_pitch_matches_a_central_difference():
         return jnp.stack([got[name] for name in names])
 
     pitch, step = 8e-3, 1e-6
-    slope = np.asarray(jax.jit(jax.jacrev(at))(jnp.asarray(pitch)))
-    values = jax.jit(at)
-    difference = (np.asarray(values(pitch + step)) - np.asarray(values(pitch - step))) / (2 * step)
+    jet = jax.jit(lambda p: jax.jvp(at, (p,), (jnp.ones(()),)))
+    slope = np.asarray(jet(jnp.asarray(pitch))[1])
+    ends = [np.asarray(jet(jnp.asarray(pitch + sign * step))[0]) for sign in (1, -1)]
+    difference = (ends[0] - ends[1]) / (2 * step)
     assert np.all(np.isfinite(slope)) and np.all(np.abs(slope) > 0)
     np.testing.assert_allclose(slope, difference, rtol=1e-5)
 
