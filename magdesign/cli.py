@@ -247,6 +247,10 @@ def _solve_grids(args, spec, began):
     levels = _levels_at(spec)
     stage(f"{_solving_at(levels)} at each candidate grid, fewest chips first ({FIRST_CALL})")
     found = fewest_chips(spec, grids, key="design.grids", before=lambda grid: stage(f"sensor.grid = {list(grid)}"))
+    solved = [trial.result for trial in found.trials if trial.result is not None]
+    if not solved:  # nothing to report a status of: the spec cannot be solved at any candidate
+        reasons = "; ".join(f"{list(trial.grid)}: {trial.reason}" for trial in found.trials)
+        raise SpecError(f"design.grids: every candidate grid is refused ({reasons})")
     best = found.best
     result = None if best is None else best.result
     estimates = None if result is None else _estimates(result, None)
@@ -255,7 +259,6 @@ def _solve_grids(args, spec, began):
         name, sense = result.objective
         objective = {"output": name, "sense": sense, "value": result.outputs[name]}
     if args.json:
-        solved = [trial.result for trial in found.trials if trial.result is not None]
         document = (
             {
                 "parameters": {},
@@ -267,6 +270,8 @@ def _solve_grids(args, spec, began):
             else {**result.to_json(), **estimates_json(result.source, estimates)}
         )
         document.update(found.to_json(), fidelity=levels, objective=objective)
+        # the contract's status is a solver's: where no grid succeeds, the last candidate's
+        document["search"], document["status"] = found.status, (result or solved[-1]).status
         document["total_seconds"] = time.perf_counter() - began
         print(json_text(document))
     else:

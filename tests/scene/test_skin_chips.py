@@ -92,19 +92,16 @@ def _grids_spec(tmp_path, grids, spec=None, target="20 mN"):
     return str(path)
 
 
-def test_solve_with_candidate_grids_refuses_bad_input_and_says_when_no_grid_succeeds(tmp_path, capsys):
+def test_solve_with_candidate_grids_refuses_bad_input_and_a_spec_it_cannot_solve(tmp_path, capsys):
     """design.grids from the command line: a lone chip is refused (three readings cannot fix a
-    contact's five unknowns) without a solve, so no grid succeeds: exit 3 and each trial's
-    status; a bad candidate, a skin whose chips are listed, and sweep and tolerance (which
+    contact's five unknowns) without a solve, so with no other candidate nothing is solved: a
+    bad spec (exit 2) naming each refusal; a bad candidate, a skin whose chips are listed, and sweep and tolerance (which
     take the spec's own grid) are bad specs naming the key."""
-    assert main(["solve", _grids_spec(tmp_path, [[1, 1]]), "--json"]) == 3
-    document = json.loads(capsys.readouterr().out)
-    assert document["status"] == "no_grid_succeeded" and document["grid"] is None and document["parameters"] == {}
-    (trial,) = document["trials"]
-    assert trial["grid"] == [1, 1] and trial["status"] == "refused" and "at least 2 chips" in trial["reason"]
-    assert main(["solve", _grids_spec(tmp_path, [[1, 1]])]) == 3
-    out = capsys.readouterr().out
-    assert "[1, 1]       1      refused" in out and "no candidate grid succeeded" in out
+    for json_option in (["--json"], []):  # nothing solved: a bad spec, with each refusal
+        assert main(["solve", _grids_spec(tmp_path, [[1, 1]]), *json_option]) == 2
+        error = capsys.readouterr().err
+        assert "\nmagdesign solve: design.grids: every candidate grid is refused ([1, 1]: " in error
+        assert "at least 2 chips" in error
     for grids, key in (([[2, 2], [0, 3]], "design.grids[1]"), ([], "design.grids"), ("2x2", "design.grids")):
         assert main(["solve", _grids_spec(tmp_path, grids)]) == 2
         assert capsys.readouterr().err.startswith(f"magdesign solve: {key}:")
