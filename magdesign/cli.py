@@ -271,7 +271,7 @@ def _solve_grids(args, spec, began):
         )
         document.update(found.to_json(), fidelity=levels, objective=objective)
         # the contract's status is a solver's: where no grid succeeds, the last candidate's
-        document["search"], document["status"] = found.status, (result or solved[-1]).status
+        document["search"], document["status"] = found.status, (solved[-1] if result is None else result).status
         document["total_seconds"] = time.perf_counter() - began
         print(json_text(document))
     else:

@@ -279,12 +279,18 @@ def _groups(labels, contributions):
     return {label: math.sqrt(total) for label, total in sums.items()}
 
 
+def _batch_size(samples: int, chunk: int) -> int:
+    """The samples of each batch: ``samples`` in the fewest batches of at most ``chunk``,
+    as equal as they can be (one compiled shape)."""
+    return -(-samples // -(-samples // chunk))
+
+
 def _draw(tp, scene, key, samples, chunk, names, bar):
     """({name: (samples,)}, (sum_u, sum_uu, sum_o, sum_ou, used)): the samples' outputs,
     drawn in batches of at most ``chunk``, and the sums of the regression slopes over the
     samples whose outputs are all finite."""
-    chunks = -(-samples // chunk)
-    size = -(-samples // chunks)
+    size = _batch_size(samples, chunk)
+    chunks = -(-samples // size)
     dimension = len(tp.unit_std)
     drawn = {name: [] for name in names}
     sum_u, sum_uu, sum_o, sum_ou, used = np.zeros(dimension), np.zeros(dimension), {}, {}, 0
@@ -346,7 +352,7 @@ def monte_carlo(
             drawn, (sum_u, sum_uu, sum_o, sum_ou, used) = _draw(tp, scene, key, samples, chunk, tuple(names), bar)
             break
         except jax.errors.JaxRuntimeError as error:
-            size = -(-samples // -(-samples // chunk))
+            size = _batch_size(samples, chunk)
             if "RESOURCE_EXHAUSTED" not in str(error) or size == 1:
                 raise
             # a batch that does not fit this machine's memory: the same draws' scheme in
