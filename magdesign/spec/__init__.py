@@ -1,7 +1,8 @@
 """The spec language: reading TOML specs into scenes, design problems, sweeps and tolerances.
 
-- :mod:`magdesign.spec.keys`: the one table of spec keys (type, unit, default, physical
-  domain, plausible range of each);
+- :mod:`magdesign.spec.key`: what a key is (type, unit, default, physical domain, plausible
+  range);
+- :mod:`magdesign.spec.keys`: the one table of spec keys;
 - :mod:`magdesign.spec.checks`: looking keys up in it, and checking the values read;
 - :mod:`magdesign.spec.table`: reading one TOML table key by key against it;
 - :mod:`magdesign.spec.scene`: scenes from a spec's tables (:func:`scene_from_spec`);
@@ -23,8 +24,8 @@ import importlib
 from magdesign.spec.checks import PlausibilityWarning as PlausibilityWarning
 from magdesign.spec.checks import UnlistedKeyError as UnlistedKeyError
 from magdesign.spec.checks import lookup as lookup
+from magdesign.spec.key import Key as Key
 from magdesign.spec.keys import KEYS as KEYS
-from magdesign.spec.keys import Key as Key
 from magdesign.units import SpecError as SpecError
 
 # The readers load on first use: they build on magdesign.scene and magdesign.design, whose

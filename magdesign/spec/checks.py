@@ -13,7 +13,8 @@ import math
 import re
 import warnings
 
-from magdesign.spec.keys import KEYS, OUTPUT_PLAUSIBLE, REQUIRED, WRITTEN_UNITS, Depends, Key
+from magdesign.spec.key import OUTPUT_PLAUSIBLE, REQUIRED, WRITTEN_UNITS, Depends, Key
+from magdesign.spec.keys import KEYS
 from magdesign.units import SpecError, unit_factor
 
 
@@ -106,7 +107,7 @@ def _same(a, b) -> bool:
 
 
 def domain_text(domain: tuple) -> str:
-    """A domain (see :data:`magdesign.spec.keys.POSITIVE`) as an interval: "(0, inf)", "[0, inf)", "(-1, 0.5)"."""
+    """A domain (see :data:`magdesign.spec.key.POSITIVE`) as an interval: "(0, inf)", "[0, inf)", "(-1, 0.5)"."""
     low, low_ok, high, high_ok = domain
     left = "(-inf" if low is None else ("[" if low_ok else "(") + f"{low:g}"
     right = "inf)" if high is None else f"{high:g}" + ("]" if high_ok else ")")

@@ -6,7 +6,8 @@
 import numpy as np
 
 from magdesign.spec.checks import domain_text
-from magdesign.spec.keys import KEYS, KINDS, REQUIRED, TABLES, WRITTEN_UNITS, Depends, Key
+from magdesign.spec.key import KINDS, REQUIRED, WRITTEN_UNITS, Depends, Key
+from magdesign.spec.keys import KEYS, TABLES
 from magdesign.units import convert
 
 _INTRO = """\

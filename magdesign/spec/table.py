@@ -8,7 +8,7 @@ the dotted key and what was expected.
 """
 
 from magdesign.spec.checks import check_domain, check_read, listed, lookup
-from magdesign.spec.keys import REQUIRED
+from magdesign.spec.key import REQUIRED
 from magdesign.units import SpecError, echo, parse
 
 _MISSING = REQUIRED

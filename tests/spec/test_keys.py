@@ -17,7 +17,8 @@ from magdesign.scene import loads_from_spec, parameters, scene_from_spec
 from magdesign.scene.effects import EFFECT_NAMES
 from magdesign.spec.checks import UnlistedKeyError, listed, recording
 from magdesign.spec.design import default_spec, problem_from_spec
-from magdesign.spec.keys import KEYS, Key
+from magdesign.spec.key import Key
+from magdesign.spec.keys import KEYS
 from magdesign.spec.reference import markdown
 from magdesign.spec.table import Table
 from magdesign.spec.tolerance import EFFECT_INPUTS, tolerance_problem_from_spec
