@@ -12,11 +12,13 @@ message.
 
 import copy
 import dataclasses
+import warnings
 from collections.abc import Callable, Sequence
 
 from magdesign.design.report import DesignResult
 from magdesign.design.solve import solve
 from magdesign.spec.design import grid_candidate, problem_from_spec
+from magdesign.spec.tolerance import tolerance_problem_from_spec
 from magdesign.units import SpecError
 
 
@@ -121,7 +123,8 @@ def fewest_chips(
         :class:`FewestChips`: every candidate tried with its status; ``best`` the first
         successful one (None if none is), ``status`` "successful" or "no_grid_succeeded".
         A SpecError where the spec places no chips on a grid, a candidate is not [rows,
-        columns] or the spec has an error of its own; a candidate grid the spec refuses
+        columns] or the spec has an error of its own (its [design.tolerances] included, read
+        as the tolerance command reads it); a candidate grid the spec refuses
         (its error names sensor.grid) is a trial with status "refused".
     """
     sensor = spec.get("sensor", {})
@@ -146,6 +149,11 @@ def fewest_chips(
                 raise
             trials.append(GridTrial(grid, grid[0] * grid[1], "refused", reason=str(error)))
             continue
+        if "tolerances" in trial_spec.get("design", {}) and not any(t.result for t in trials):
+            # read by the tolerance command: refused here as there, before the first solve
+            with warnings.catch_warnings():  # the spec's warnings are said by problem_from_spec
+                warnings.simplefilter("ignore")
+                tolerance_problem_from_spec(trial_spec)
         result = solve(problem, **options)
         trials.append(GridTrial(grid, grid[0] * grid[1], str(result.status), result=result))
         if trials[-1].status == "successful":

@@ -136,3 +136,16 @@ def test_solve_with_candidate_grids_reports_the_fewest_chips_that_succeed(tmp_pa
     # the written answer is a plain design at the found grid
     solved = tomllib.loads(written.read_text())
     assert solved["sensor"]["grid"] == [2, 2] and "grids" not in solved["design"]
+
+
+def test_candidate_grids_refuse_a_tolerance_that_the_tolerance_command_refuses():
+    """[design.tolerances] is read as `magdesign tolerance` reads it, before any grid is
+    solved: a tolerance on an input a skin does not have is the spec's own error."""
+    spec = grid_skin()
+    spec["design"] = {
+        "variables": {"sensor.pitch": {"start": "8 mm", "lower": "4 mm", "upper": "12 mm"}},
+        "targets": {"force_resolution_normal": {"value": "1 mN"}},
+        "tolerances": {"mechanics.c10": "5 %"},
+    }
+    with pytest.raises(SpecError, match=r"design\.tolerances\.mechanics\.c10"):
+        fewest_chips(spec, [[1, 1], [2, 2]])
