@@ -609,6 +609,9 @@ def main(argv=None):
     _progress.enable(None if args.quiet else f"magdesign {args.command}")
     kept, directory = _export.directory(), cache_directory()  # the command's exported programs, for its run
     _export.enable(None if directory is None else export_directory(directory))
+    # the programs that the last run of these arguments here loaded, loaded ahead as it starts
+    run = f"{os.getcwd()}\n{sys.argv[1:] if argv is None else list(argv)}"
+    _export.load_ahead(run)
     stdout, sys.stdout = sys.stdout, Stdout(sys.stdout)
     unraisable, sys.unraisablehook = sys.unraisablehook, note_unraisable
     try:
@@ -646,6 +649,7 @@ def main(argv=None):
         )
     finally:
         _progress.enable(None)
+        _export.remember_run(run)
         _export.enable(kept)
         sys.stdout, sys.unraisablehook = stdout, unraisable
 
