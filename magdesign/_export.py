@@ -347,11 +347,13 @@ def load_ahead(run: str) -> None:
     global _USED
     folder = directory()
     _USED = []
-    if folder is None or jax.device_count() > 1:
+    if folder is None:
         return
     try:
         names = pickle.loads(_run_path(folder, run).read_bytes())
     except Exception:  # no run of that name yet, or a damaged file: nothing ahead
+        return
+    if jax.device_count() > 1:  # asked only now: a run that loaded nothing leaves JAX's backend unstarted
         return
     _lapack_ready()
     backend = jax.devices()[0].client

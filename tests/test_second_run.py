@@ -162,3 +162,22 @@ def test_a_run_loads_ahead_the_executables_that_its_last_run_read(tmp_path, monk
         _export.remember_run("run A")
     finally:
         _export.enable(None)
+
+
+def test_a_sweep_that_sets_up_its_devices_loads_nothing_ahead(monkeypatch):
+    # --devices and jax.distributed must come before JAX starts its backend, which loading
+    # ahead would start: such a sweep neither loads ahead nor names its run
+    from magdesign._cli_parser import build_parser
+    from magdesign.cli import _sets_up_devices
+
+    sweep = ["sweep", DEFAULT_SPEC, "--over", "compliance=0.3mm/N:0.34mm/N:3"]
+    monkeypatch.delenv("JAX_COORDINATOR_ADDRESS", raising=False)
+    parse = build_parser().parse_args
+    assert not _sets_up_devices(parse(sweep)) and not _sets_up_devices(parse(["solve", "--fidelity", "reissner"]))
+    assert _sets_up_devices(parse([*sweep, "--devices", "1"]))
+    assert _sets_up_devices(parse([*sweep, "--distributed"]))
+    assert _sets_up_devices(
+        parse([*sweep, "--coordinator", "localhost:1234", "--num-processes", "1", "--process-id", "0"])
+    )
+    monkeypatch.setenv("JAX_COORDINATOR_ADDRESS", "localhost:1234")
+    assert _sets_up_devices(parse(sweep))
