@@ -10,7 +10,7 @@ import importlib.metadata
 
 # Python's cyclic collector stays off while JAX and the package load, and what is alive
 # then (modules, their functions and classes: objects that live as long as the process) is
-# frozen out of later collections: the collections that the imports' million objects set
+# frozen out of later collections: the collections that the imports' 170,000 objects set
 # off, each walking the whole heap, cost a tenth of a second of every command's start.
 _collecting = gc.isenabled()
 gc.disable()

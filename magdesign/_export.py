@@ -342,8 +342,8 @@ def load_ahead(run: str) -> None:
     (XLA loads an executable without Python's lock: a quarter of a second of CPU apiece for
     the design solver's). :func:`_read_executable` takes an executable loaded ahead where
     its entry's text is the one asked for; what the run does not ask for is dropped at
-    :func:`remember_run`. Nothing is loaded where keeping is off, on several devices or
-    where no run of that name was remembered."""
+    :func:`remember_run`. Nothing is loaded where keeping is off, on several devices,
+    where no run of that name was remembered, or where this process holds it already."""
     global _USED
     folder = directory()
     _USED = []
@@ -357,9 +357,10 @@ def load_ahead(run: str) -> None:
         return
     _lapack_ready()
     backend = jax.devices()[0].client
+    held = {place[0] for place, compiled in _LOADED.values() if compiled is not None}  # an earlier run here
     for name in names:
         path = folder / str(name)
-        if path not in _AHEAD:
+        if path not in _AHEAD and path not in held:
             _AHEAD[path] = Future()
             threading.Thread(target=_load, args=(path, backend, _AHEAD[path]), name=f"load {name}").start()
 

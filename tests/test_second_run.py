@@ -148,6 +148,9 @@ def test_a_run_loads_ahead_the_executables_that_its_last_run_read(tmp_path, monk
         np.testing.assert_array_equal(second["sum"], first["sum"])
         np.testing.assert_array_equal(second["sum"], [2.0, 3.0, 4.0])  # 0..2 + 2
         _export.remember_run("run A")
+        _export.load_ahead("run A")  # held by this process already: nothing loaded again
+        assert not _export._AHEAD
+        _export.remember_run("run A")
         # another run's name loads nothing ahead; an entry loaded ahead for another text is
         # not taken, and the call reads and compiles as usual
         _export.load_ahead("run B")
