@@ -19,7 +19,7 @@ Prints:
   time and the medians of five second runs' wall and CPU (user + sys) times
   (``--second-run-only``: these rows alone); then where a second Reissner solve goes
   (imports, spec, solve, estimate, report; within solve and estimate: loading the kept
-  executables, lowering, loading from the compilation cache and compiling, from JAX's
+  executables or waiting for the threads that load them ahead, lowering, loading from the compilation cache and compiling, from JAX's
   monitoring events, and the rest: tracing and running);
 - where that first call goes, in a new process without the cache: the seconds (wall and
   CPU) of tracing the solver's program, lowering it to StableHLO and compiling it with XLA,
@@ -136,7 +136,8 @@ print("size", len(re.findall(r"= [^=]* fusion\\(", text)), len(re.findall(r"\\n 
 
 # Where a second `magdesign solve --fidelity reissner` goes, in a new process whose caches a
 # first run filled: each stage's wall and CPU seconds, from timers around the command's
-# steps and around loading the kept executables (magdesign._export, "executable-load"),
+# steps and around loading the kept executables (magdesign._export, "executable-load": with
+# the executables loaded ahead in threads as the command starts, the wait for them),
 # and JAX's own monitoring events (lowering, loading from the compilation cache,
 # compiling: wall only); "tracing+run" is the rest of the solve and estimate steps (JAX's
 # tracing events count a nested program's trace again in its caller's).

@@ -9,6 +9,8 @@ compilation cache then holds the executable of the deserialized program. Beside 
 compiled executable is kept too, one per concrete shapes of the arguments (see
 :class:`_Program`): a later process loads and calls it with no trace, no lowering and no
 compilation-cache key to hash, and falls back to the exported program where it cannot.
+A command names its run (:func:`load_ahead`): the executables that the last run of that
+name read are loaded ahead in threads of their own, side by side, as the run starts.
 
 An entry is keyed by a text that names everything the trace depends on besides its
 arguments' shapes and dtypes (the caller's ``structure``: the problem's tree structure,
@@ -30,12 +32,15 @@ import functools
 import hashlib
 import importlib.machinery
 import importlib.util
+import io
 import os
 import pickle
 import re
 import sys
 import tempfile
+import threading
 import types
+from concurrent.futures import Future
 from pathlib import Path
 
 import equinox as eqx
@@ -201,6 +206,8 @@ class _Program:
                 _LOADED.clear()
             _LOADED[memo] = (path, text), _read_executable(path, text, in_tree)
         place, compiled = _LOADED[memo]
+        if _USED is not None and place[0] not in _USED:
+            _USED.append(place[0])  # for the next run's load_ahead, loaded here or compiled and kept
         return (memo, *place), compiled
 
     def _keep(self, place, compile):
@@ -321,9 +328,104 @@ def _kept(fn, name, structure, in_tree, avals):
     return _KEPT[memo]
 
 
+# Loading ahead (see load_ahead): {path: Future of (entry, the loaded executable, its
+# arguments' info, flat, and no_kwargs), or None where it failed}; and the paths of the
+# executables that the run since load_ahead read or kept, in order (None: no run).
+_AHEAD = {}
+_USED = None
+
+
+def load_ahead(run: str) -> None:
+    """Start loading the executables that the last run named ``run`` (a text naming the
+    command, e.g. its arguments and folder) read or kept, each in a thread of its own, so
+    that a command's second run loads its programs side by side and while it reads its spec
+    (XLA loads an executable without Python's lock: a quarter of a second of CPU apiece for
+    the design solver's). :func:`_read_executable` takes an executable loaded ahead where
+    its entry's text is the one asked for; what the run does not ask for is dropped at
+    :func:`remember_run`. Nothing is loaded where keeping is off, on several devices,
+    where no run of that name was remembered, or where this process holds it already."""
+    global _USED
+    folder = directory()
+    _USED = []
+    if folder is None:
+        return
+    try:
+        names = pickle.loads(_run_path(folder, run).read_bytes())
+    except Exception:  # no run of that name yet, or a damaged file: nothing ahead
+        return
+    if jax.device_count() > 1:  # asked only now: a run that loaded nothing leaves JAX's backend unstarted
+        return
+    _lapack_ready()
+    backend = jax.devices()[0].client
+    held = {place[0] for place, compiled in _LOADED.values() if compiled is not None}  # an earlier run here
+    for name in names:
+        path = folder / str(name)
+        if path not in _AHEAD and path not in held:
+            _AHEAD[path] = Future()
+            threading.Thread(target=_load, args=(path, backend, _AHEAD[path]), name=f"load {name}").start()
+
+
+def remember_run(run: str) -> None:
+    """Keep the names of the executables that this run (since :func:`load_ahead`) read or
+    kept, for the next run named ``run``; drop the executables loaded ahead that it did
+    not ask for."""
+    global _USED
+    folder, used, _USED = directory(), _USED, None
+    _AHEAD.clear()
+    if folder is None or not used:
+        return
+    names = [path.name for path in used if path.parent == folder]
+    path = _run_path(folder, run)
+    try:
+        same = pickle.loads(path.read_bytes()) == names
+    except Exception:  # not yet kept, or damaged: written
+        same = False
+    if not same:
+        _keep(path, names)
+
+
+def _run_path(folder, run):
+    """The file of the executables' names of the run named ``run`` (see :func:`load_ahead`)."""
+    text = f"{run}\n{versions()}"
+    return folder / f"run-{hashlib.sha256(text.encode()).hexdigest()[:32]}.names"
+
+
+def _load(path, backend, future):
+    """Load the executable kept at ``path`` on ``backend`` (the thread of :func:`load_ahead`):
+    ``future`` gets (entry, executable, its arguments' info, flat, no_kwargs), as
+    jax.experimental.serialize_executable.deserialize_and_load makes them before it
+    knows the arguments' tree, or None where it fails."""
+    try:
+        entry = pickle.loads(path.read_bytes())
+        unpickler = serialize_executable._JaxPjrtUnpickler(io.BytesIO(entry["executable"]), backend)
+        unloaded, args_info, no_kwargs = unpickler.load()
+        future.set_result((entry, unloaded.load(), args_info, no_kwargs))
+    except BaseException:  # any failure: the run reads the entry itself
+        future.set_result(None)
+
+
+def _loaded_ahead(path, text, in_tree):
+    """The executable :func:`load_ahead` loaded from ``path``, for ``text`` and arguments of
+    ``in_tree`` (waiting for its thread), or None where none was or it is for another text."""
+    ahead = _AHEAD.pop(path, None)
+    loaded = None if ahead is None else ahead.result()
+    if loaded is None or loaded[0].get("text") != text:
+        return None
+    entry, executable, args_info, no_kwargs = loaded
+    try:
+        out_tree = jax.tree.structure(pickle.loads(entry["out_tree"]))
+        return jax.stages.Compiled(executable, [], in_tree.unflatten(args_info), out_tree, no_kwargs=no_kwargs)
+    except Exception:  # another jax's Compiled: the entry is read as usual
+        return None
+
+
 def _read_executable(path, text, in_tree):
-    """The executable kept at ``path`` for ``text``, loaded for arguments of ``in_tree``,
-    or None where it is missing, unreadable, for another text or fails to load."""
+    """The executable kept at ``path`` for ``text``, loaded for arguments of ``in_tree``
+    (by :func:`load_ahead` where it was), or None where it is missing, unreadable, for
+    another text or fails to load."""
+    ahead = _loaded_ahead(path, text, in_tree)
+    if ahead is not None:
+        return ahead
     try:
         entry = pickle.loads(path.read_bytes())
         if entry["text"] != text:

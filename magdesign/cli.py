@@ -420,6 +420,14 @@ def _start_devices(args):
         )
 
 
+def _sets_up_devices(args) -> bool:
+    """Whether the command sets up its devices (:func:`_start_devices`: ``--devices``,
+    jax.distributed), which JAX takes only before it starts its backend."""
+    named = [getattr(args, name, None) for name in ("devices", "coordinator", "num_processes", "process_id")]
+    distributed = getattr(args, "distributed", False) or os.environ.get("JAX_COORDINATOR_ADDRESS")
+    return bool(distributed) or any(value is not None for value in named)
+
+
 def run_sweep(args):
     _start_devices(args)
     spec = load_spec(args.spec)
@@ -609,6 +617,11 @@ def main(argv=None):
     _progress.enable(None if args.quiet else f"magdesign {args.command}")
     kept, directory = _export.directory(), cache_directory()  # the command's exported programs, for its run
     _export.enable(None if directory is None else export_directory(directory))
+    # the programs that the last run of these arguments here loaded, loaded ahead as it starts;
+    # not for a sweep that sets up its devices, which must come before JAX starts its backend
+    run = None if _sets_up_devices(args) else f"{os.getcwd()}\n{sys.argv[1:] if argv is None else list(argv)}"
+    if run is not None:
+        _export.load_ahead(run)
     stdout, sys.stdout = sys.stdout, Stdout(sys.stdout)
     unraisable, sys.unraisablehook = sys.unraisablehook, note_unraisable
     try:
@@ -646,6 +659,8 @@ def main(argv=None):
         )
     finally:
         _progress.enable(None)
+        if run is not None:
+            _export.remember_run(run)
         _export.enable(kept)
         sys.stdout, sys.unraisablehook = stdout, unraisable
 

@@ -101,3 +101,86 @@ def test_on_device_and_strongly_typed_make_strong_arrays_of_the_same_values():
     from_numpy = strongly_typed(np.array([0.5, 2.0]))
     assert isinstance(from_numpy, jax.Array) and not from_numpy.weak_type
     np.testing.assert_array_equal(from_numpy, [0.5, 2.0])
+
+
+@pytest.mark.parametrize("collecting", [True, False])
+def test_importing_magdesign_freezes_what_it_loaded_and_leaves_the_collector_as_it_was(collecting):
+    # The package loads JAX with Python's collector off and then freezes what is alive
+    # (magdesign/__init__.py): a command's start skips the collections that its imports set
+    # off. Asked in a new process, where nothing was imported before.
+    script = (
+        "import gc, sys\n"
+        f"{'' if collecting else 'gc.disable()'}\n"
+        "import magdesign.cli\n"
+        "print(gc.isenabled(), gc.get_freeze_count(), 'jax' in sys.modules)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    enabled, frozen, jax_loaded = done.stdout.split()
+    assert enabled == str(collecting) and jax_loaded == "True"
+    # JAX's modules alone are over 100,000 objects (regression value: 168,000 here); a
+    # freeze before the imports, or none, leaves a few hundred or 0
+    assert int(frozen) > 100_000
+
+
+def test_a_run_loads_ahead_the_executables_that_its_last_run_read(tmp_path, monkeypatch):
+    # Two "runs" of one name in this process, the second as a new process finds the folder:
+    # the program's executable is loaded in load_ahead's thread, and the call takes it.
+    from magdesign import _export
+
+    program = _export.jit(lambda x, y: {"sum": x + 2.0 * y}, "ahead_test", "x + 2 y")
+    x, y = jnp.arange(3.0), jnp.ones(3)
+    monkeypatch.setattr(_export, "_state", {"directory": None})
+    _export.enable(tmp_path)
+    try:
+        _export.load_ahead("run A")
+        first = program(x, y)
+        _export.remember_run("run A")
+        assert len(list(tmp_path.glob("run-*.names"))) == 1
+        _export._LOADED.clear()  # what a new process starts without
+        _export.load_ahead("run A")
+        (path,) = _export._AHEAD
+        assert path.name.startswith("ahead_test-") and path.suffix == ".executable"
+        taken = []
+        loaded_ahead = _export._loaded_ahead
+        monkeypatch.setattr(_export, "_loaded_ahead", lambda *a: taken.append(loaded_ahead(*a)) or taken[-1])
+        second = program(x, y)
+        assert taken and taken[0] is not None and not _export._AHEAD
+        np.testing.assert_array_equal(second["sum"], first["sum"])
+        np.testing.assert_array_equal(second["sum"], [2.0, 3.0, 4.0])  # 0..2 + 2
+        _export.remember_run("run A")
+        _export.load_ahead("run A")  # held by this process already: nothing loaded again
+        assert not _export._AHEAD
+        _export.remember_run("run A")
+        # another run's name loads nothing ahead; an entry loaded ahead for another text is
+        # not taken, and the call reads and compiles as usual
+        _export.load_ahead("run B")
+        assert not _export._AHEAD
+        _export.remember_run("run B")
+        _export._LOADED.clear()
+        _export.load_ahead("run A")
+        (path,) = _export._AHEAD
+        taken.clear()
+        assert _export._loaded_ahead(path, "another text", jax.tree.structure(((x, y), {}))) is None
+        np.testing.assert_array_equal(program(x, y)["sum"], [2.0, 3.0, 4.0])
+        _export.remember_run("run A")
+    finally:
+        _export.enable(None)
+
+
+def test_a_sweep_that_sets_up_its_devices_loads_nothing_ahead(monkeypatch):
+    # --devices and jax.distributed must come before JAX starts its backend, which loading
+    # ahead would start: such a sweep neither loads ahead nor names its run
+    from magdesign._cli_parser import build_parser
+    from magdesign.cli import _sets_up_devices
+
+    sweep = ["sweep", DEFAULT_SPEC, "--over", "compliance=0.3mm/N:0.34mm/N:3"]
+    monkeypatch.delenv("JAX_COORDINATOR_ADDRESS", raising=False)
+    parse = build_parser().parse_args
+    assert not _sets_up_devices(parse(sweep)) and not _sets_up_devices(parse(["solve", "--fidelity", "reissner"]))
+    assert _sets_up_devices(parse([*sweep, "--devices", "1"]))
+    assert _sets_up_devices(parse([*sweep, "--distributed"]))
+    assert _sets_up_devices(
+        parse([*sweep, "--coordinator", "localhost:1234", "--num-processes", "1", "--process-id", "0"])
+    )
+    monkeypatch.setenv("JAX_COORDINATOR_ADDRESS", "localhost:1234")
+    assert _sets_up_devices(parse(sweep))
