@@ -96,6 +96,20 @@ def dipole_field(offsets, moments):
     return (3 * unit * np.sum(unit * moments, axis=-1, keepdims=True) - moments) / (4 * np.pi * r**3)
 
 
+# the reference's Hankel nodes: panels of width 2 in k a (reference_change says why)
+HANKEL = make_quadrature(width=2.0)
+
+
+@jax.jit
+def _with_jacobian(points, load):
+    """u (m) and du_i / dx_j (-) from the Hankel quadrature at points (P, 3): (P, 3), (P, 3, 3)."""
+
+    def displacement(p):
+        return layer_displacement(p, layer=LAYER, load=load, quadrature=HANKEL)
+
+    return jax.vmap(lambda p: (displacement(p), jax.jacfwd(displacement)(p)))(points)
+
+
 def reference_change(points, load, panels=10, order=6, heights=8):
     """dB by a dense tensor Gauss-Legendre rule over the layer: u from the Hankel quadrature,
     omega = curl(u) / 2 from its forward-mode Jacobian, the gradient of the dipole field by
@@ -115,14 +129,10 @@ def reference_change(points, load, panels=10, order=6, heights=8):
     zs, wz = 0.5 * THICKNESS * (zx + 1), 0.5 * THICKNESS * zw
     grid = np.stack(np.meshgrid(xs, ys, zs, indexing="ij"), axis=-1).reshape(-1, 3)
     volume = np.einsum("i,j,k->ijk", wx, wy, wz).ravel()[:, None]
-    quadrature = make_quadrature(width=2.0)
-
-    def displacement(p):
-        return layer_displacement(p, layer=LAYER, load=load, quadrature=quadrature)
-
-    # u and du_i / dx_j at each point, in 40 chunks of one size (one compiled program)
-    with_jacobian = jax.jit(jax.vmap(lambda p: (displacement(p), jax.jacfwd(displacement)(p))))
-    chunks = [with_jacobian(chunk) for chunk in np.array_split(grid, 40)]
+    # u and du_i / dx_j at each point, in 40 chunks of one size: one compiled program for
+    # every chunk and both loads (the load is an argument, not a constant of the program)
+    load = jax.tree.map(jnp.asarray, load)
+    chunks = [_with_jacobian(chunk, load) for chunk in np.array_split(grid, 40)]
     u = np.concatenate([np.asarray(chunk[0]) for chunk in chunks])
     gradient = np.concatenate([np.asarray(chunk[1]) for chunk in chunks])
     omega = 0.5 * np.stack(

@@ -5,6 +5,7 @@ import copy
 import json
 import tomllib
 
+import equinox as eqx
 import jax.numpy as jnp
 import pytest
 from scene_helpers import example
@@ -14,6 +15,10 @@ from magdesign.scene import loads_from_spec, outputs, scene_from_spec, with_para
 from magdesign.spec import SpecError, fewest_chips
 from magdesign.spec.design import spec_text
 from magdesign.units import mT
+
+# the outputs of a scene over its loads, one compiled program per grid (the grid's chips
+# are the program's shapes): a grid's outputs at another polarization reuse it
+evaluate = eqx.filter_jit(outputs)
 
 
 def grid_skin(grid=(2, 2)):
@@ -54,7 +59,7 @@ def test_the_fewest_chips_that_localise_to_a_target():
     bounds = {}
     for grid in grids[1:]:
         spec = grid_skin(grid)
-        bounds[grid] = float(outputs(scene_from_spec(spec), loads_from_spec(spec))["localisation_worst"])
+        bounds[grid] = float(evaluate(scene_from_spec(spec), loads_from_spec(spec))["localisation_worst"])
     target = bounds[(3, 3)] / 2
     needed = {grid: 20 * mT * bound / target for grid, bound in bounds.items()}
     assert needed[(3, 3)] == pytest.approx(40 * mT) and needed[(1, 2)] > 80 * mT and needed[(2, 2)] > 80 * mT
@@ -70,10 +75,10 @@ def test_the_fewest_chips_that_localise_to_a_target():
     assert all(trial.status not in ("successful", "refused") for trial in found.trials[1:3])
     assert found.status == "successful" and found.best.grid == (3, 3) and found.best.chips == 9
     assert found.best.result.parameters["magnet.polarization"] == pytest.approx(40 * mT, rel=1e-6)
-    # the answer checked with a simulation of the 3 x 3 grid at the solved J0
+    # the answer checked with a simulation of the 3 x 3 grid at the solved J0 (the program of its bound)
     nine = grid_skin((3, 3))
     scene = with_parameters(scene_from_spec(nine), {"magnet.polarization": jnp.asarray(40 * mT)})
-    achieved = outputs(scene, loads_from_spec(nine))
+    achieved = evaluate(scene, loads_from_spec(nine))
     assert float(achieved["localisation_worst"]) == pytest.approx(target, rel=1e-6)
     assert float(achieved["saturation_force"]) >= 5.0
 
@@ -124,7 +129,7 @@ def test_solve_with_candidate_grids_reports_the_fewest_chips_that_succeed(tmp_pa
     plus a constant background): a target of half the 2 x 2 grid's bound at 20 mT needs 40 mT.
     The lone chip is refused, the 2 x 2 grid succeeds there, and the 3 x 3 grid is never tried."""
     spec = grid_skin((2, 2))
-    bound = float(outputs(scene_from_spec(spec), loads_from_spec(spec))["force_resolution_normal"])
+    bound = float(evaluate(scene_from_spec(spec), loads_from_spec(spec))["force_resolution_normal"])
     path = _grids_spec(tmp_path, [[3, 3], [1, 1], [2, 2]], target=f"{bound / 2!r} N")
     written = tmp_path / "solved.toml"
     assert main(["solve", path, "--json", "--write", str(written)]) == 0

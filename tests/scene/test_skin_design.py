@@ -2,6 +2,8 @@
 against magpylib's block at the moved chips, a derivative of the outputs with respect to the
 pitch against a central difference, and a design that solves for a pitch."""
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import magpylib
@@ -77,23 +79,37 @@ def test_a_grid_is_its_unit_offsets_times_the_pitch_parameter():
     np.testing.assert_allclose(wider.map_points(), [[0.0, 0.0]], atol=1e-15)
 
 
+# The outputs the pitch's tests read, and the cells they take: 2 x 2 x 1 rigid cells, the
+# coarsest the scene builds: a derivative's agreement with a central difference, and a
+# design's reaching a target the same model sets, hold at any cells.
+NAMES = ("localisation_median", "force_resolution_normal")
+PITCH_CELLS = (2, 2, 1)
+
+
+@functools.cache
+def pitch_jet():
+    """One compiled program for the pitch's tests: pitch (m) -> (the outputs NAMES (m, N),
+    their derivative in the pitch (forward mode, as a design takes its derivatives:
+    magdesign.design's jets)) of the 2 x 2 grid skin on PITCH_CELLS."""
+    spec = grid_skin(cells=PITCH_CELLS)
+    scene, loads = scene_from_spec(spec), loads_from_spec(spec)
+
+    def at(pitch):
+        got = outputs(with_parameters(scene, {"sensor.pitch": pitch}), loads)
+        return jnp.stack([got[name] for name in NAMES])
+
+    jet = jax.jit(lambda p: jax.jvp(at, (p,), (jnp.ones(()),)))
+    return lambda pitch: tuple(np.asarray(part) for part in jet(jnp.asarray(pitch)))
+
+
 @pytest.mark.slow  # the derivative of the outputs' Jacobians through the layer: a minute to compile
 def test_the_outputs_derivative_in_the_pitch_matches_a_central_difference():
     """Forward mode, as a design takes its derivatives (magdesign.design's jets): one
     compiled program gives the outputs and their derivative, at the pitch and at the
     central difference's two ends."""
-    spec = grid_skin()
-    scene, loads = scene_from_spec(spec), loads_from_spec(spec)
-    names = ("localisation_median", "force_resolution_normal")
-
-    def at(pitch):
-        got = outputs(with_parameters(scene, {"sensor.pitch": pitch}), loads)
-        return jnp.stack([got[name] for name in names])
-
     pitch, step = 8e-3, 1e-6
-    jet = jax.jit(lambda p: jax.jvp(at, (p,), (jnp.ones(()),)))
-    slope = np.asarray(jet(jnp.asarray(pitch))[1])
-    ends = [np.asarray(jet(jnp.asarray(pitch + sign * step))[0]) for sign in (1, -1)]
+    slope = pitch_jet()(pitch)[1]
+    ends = [pitch_jet()(pitch + sign * step)[0] for sign in (1, -1)]
     difference = (ends[0] - ends[1]) / (2 * step)
     assert np.all(np.isfinite(slope)) and np.all(np.abs(slope) > 0)
     np.testing.assert_allclose(slope, difference, rtol=1e-5)
@@ -101,14 +117,13 @@ def test_the_outputs_derivative_in_the_pitch_matches_a_central_difference():
 
 @pytest.mark.slow  # compiles the outputs' Jacobians and their derivatives through the layer
 def test_a_design_finds_the_pitch_that_localises_to_a_target():
-    """The localisation at a 10 mm pitch, from a simulation, is the target of a design that
-    starts at 8 mm: the solve reaches it, at 10 mm (the bound falls steadily with the pitch
-    between 6 and 12 mm in this skin: checked at the ends)."""
-    start = grid_skin(cells=(2, 2, 1))
-    loads = loads_from_spec(start)
-    scene = scene_from_spec(start)
-    at = jax.jit(lambda p: outputs(with_parameters(scene, {"sensor.pitch": p}), loads)["localisation_median"])
-    target, ends = float(at(10e-3)), [float(at(6e-3)), float(at(12e-3))]
+    """The localisation at a 10 mm pitch, from a simulation (the program of the test
+    above), is the target of a design that starts at 8 mm: the solve reaches it, at 10 mm
+    (the bound falls steadily with the pitch between 6 and 12 mm in this skin: checked at
+    the ends)."""
+    start = grid_skin(cells=PITCH_CELLS)
+    median = NAMES.index("localisation_median")
+    target, ends = float(pitch_jet()(10e-3)[0][median]), [float(pitch_jet()(p)[0][median]) for p in (6e-3, 12e-3)]
     assert ends[0] > target > ends[1]
     start["design"] = {
         "variables": {"sensor.pitch": {"lower": "6 mm", "upper": "12 mm"}},

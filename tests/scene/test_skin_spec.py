@@ -1,7 +1,7 @@
 """The magnetic skin from a spec: the example builds the skin it states, every bad input is
-a one-line SpecError naming its key, and a design of a small skin solves from the command line."""
+a one-line SpecError naming its key, and a design of a small skin solves from its spec."""
 
-import json
+import tomllib
 import warnings
 
 import equinox as eqx
@@ -13,6 +13,7 @@ import pytest
 from scene_helpers import EXAMPLES, example
 
 from magdesign.cli import main
+from magdesign.design import solve
 from magdesign.scene import (
     Loads,
     SimulationResult,
@@ -27,6 +28,8 @@ from magdesign.scene import (
 from magdesign.scene.effects import EFFECT_NAMES
 from magdesign.scene.skin_scene import SkinScene
 from magdesign.spec.checks import PlausibilityWarning
+from magdesign.spec.design import problem_from_spec
+from magdesign.spec.levels import outputs_at
 from magdesign.units import SpecError
 
 
@@ -282,22 +285,21 @@ saturation_ratio = { upper = 1 }
 
 
 @pytest.mark.slow  # compiles the outputs' Jacobians through the layer's transforms, and their derivatives
-def test_a_small_skins_design_solves_from_the_command_line(tmp_path, capsys):
+def test_a_small_skins_design_solves_from_its_spec():
+    """The spec's design solved in Python, as the command does: the command line's solve of
+    a skin is test_skin_chips's (design.grids) and its simulate test_cli's (every example),
+    so that here the command's error estimates (one more program: the outputs at the finer
+    field) are left out."""
     text = (EXAMPLES / "skin.toml").read_text()
     text = text.replace("direction = [0, 0, 1]", "direction = [0, 0, 1]\nresolution = [20, 20, 4]")
     text = text.replace("map_grid = [2, 2]", "map_grid = [1, 1]")
     # the resolution scales as 1 / J0 (the readings' Jacobian is linear in it): from the start's value,
     # the target at twice the start's polarization is half the start's resolution
-    start = tmp_path / "start.toml"
-    start.write_text(text)
-    assert main(["simulate", str(start), "--json"]) == 0
-    resolution = json.loads(capsys.readouterr().out)["outputs"]["force_resolution_normal"]
-    path = tmp_path / "design.toml"
-    path.write_text(text + SMALL_DESIGN.replace("TARGET", f"{resolution / 2:.12g} N"))
-    assert main(["solve", str(path), "--json"]) == 0
-    solved = json.loads(capsys.readouterr().out)
-    assert solved["status"] == "successful"
-    assert solved["parameters"]["magnet.polarization"] == pytest.approx(0.04, rel=1e-4)
+    resolution = outputs_at(tomllib.loads(text))["force_resolution_normal"]
+    problem, _ = problem_from_spec(tomllib.loads(text + SMALL_DESIGN.replace("TARGET", f"{resolution / 2:.12g} N")))
+    solved = solve(problem)
+    assert str(solved.status) == "successful", solved.status
+    assert float(solved.parameters["magnet.polarization"]) == pytest.approx(0.04, rel=1e-4)
 
 
 def test_the_simulation_table_shows_a_skins_contact_point_in_line_with_its_readings():
