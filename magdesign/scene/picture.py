@@ -31,6 +31,11 @@ MM = 1e3  # the picture is drawn in millimetres
 OUTLINE = dict(fill=False, edgecolor="k", linewidth=1.2)
 
 
+# One jitted function for every panel: a lambda made per call would be a new function to
+# jit, and the scene's field (for a soft body its solve) compiled again for each panel.
+_source_field = eqx.filter_jit(lambda scene, points, u: scene.source_field(points, u))
+
+
 def _largest_load(loads):
     """Index of the load point with the largest force."""
     magnitude = np.abs(np.asarray(loads.normal)) + np.linalg.norm(np.asarray(loads.shear), axis=-1)
@@ -176,9 +181,7 @@ def _plane_field(scene, displacement, x, z):
     magnetised skin (no field model there)."""
     xx, zz = np.meshgrid(x, z)
     points = jnp.asarray(np.stack([xx, 0 * xx, zz], axis=-1))
-    field = np.asarray(
-        eqx.filter_jit(lambda scene, points, u: scene.source_field(points, u))(scene, points, jnp.asarray(displacement))
-    )
+    field = np.asarray(_source_field(scene, points, jnp.asarray(displacement)))
     if isinstance(scene, FilmScene):
         below = zz < float(scene.layer.thickness + displacement[2])
         field = np.where(below[..., None], field, np.nan)

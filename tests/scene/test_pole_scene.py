@@ -75,6 +75,12 @@ def _plate(p):
 
 
 field = eqx.filter_jit(lambda scene, points, displacement: scene.source_field(points, displacement))
+# The moments tests share their programs (one compile each for the 8-cell scene): the
+# tilt forces at four tilts, the outputs (the attraction among them) and the field at
+# three points.
+tilt_forces = eqx.filter_jit(lambda s, t: jax.vmap(s.tangential_force)(t))
+moments_outputs = eqx.filter_jit(lambda s: s.outputs(None))
+FIELD_POINTS = np.array([[0.5e-3, 0.0, 0.1e-3], [-0.7e-3, 0.2e-3, 0.3e-3], [1.5e-3, -0.4e-3, 0.2e-3]])
 
 
 def _moments_scene(cells=8):
@@ -108,7 +114,7 @@ def test_moments_field_against_magpylib_cuboids():
     p = {key: float(value) for key, value in parameters(scene).items()}
     theta = np.deg2rad(10.0)
     cells, *_ = _rod_in_magpylib(scene, theta)
-    points = np.array([[0.5e-3, 0.0, 0.1e-3], [-0.7e-3, 0.2e-3, 0.3e-3], [1.5e-3, -0.4e-3, 0.2e-3]])
+    points = FIELD_POINTS
     displacement = scene.tip(theta) - scene.tip(0.0)
     value = np.asarray(field(scene, points, displacement))
     expected = _plate(p).getB(points) + cells.getB(points)
@@ -136,7 +142,8 @@ def test_moments_coenergy_gradient_is_the_kelvin_force_and_torque():
     forces = np.einsum("ck,ckj->cj", moments, gradient)  # (m . grad) B, curl-free B
     ball = np.array([0.0, 0.0, p["geometry.gap"] + p["pole.ball_radius"]])
     torque = np.sum(np.cross(positions - ball, forces) + np.cross(moments, plate.getB(positions)), axis=0)
-    force_t = float(eqx.filter_jit(lambda s, t: s.tangential_force(t))(scene, theta))
+    # the force at theta among four tilts: the program of the outputs test below
+    force_t = float(tilt_forces(scene, np.array([theta, -theta, -0.3, 0.3]))[0])
     # a tilt theta turns the ball about -y (its bottom moves to +x): dW'/dtheta = -torque_y
     np.testing.assert_allclose(force_t * p["pole.ball_radius"], -torque[1], rtol=1e-5)
     _, _, turn0, local0, m0 = _rod_in_magpylib(scene, 0.0)
@@ -146,7 +153,7 @@ def test_moments_coenergy_gradient_is_the_kelvin_force_and_torque():
         np.dot(m, (plate.getB(x + step * np.eye(3)[2]) - plate.getB(x - step * np.eye(3)[2])) / (2 * step))
         for x, m in zip(pos0, mom0)
     )
-    np.testing.assert_allclose(float(eqx.filter_jit(lambda s: s.attraction())(scene)), -fz, rtol=1e-5)
+    np.testing.assert_allclose(float(moments_outputs(scene)["attraction"]), -fz, rtol=1e-5)
 
 
 @pytest.mark.slow
@@ -155,13 +162,13 @@ def test_moments_outputs_restore_and_their_differences_hold():
     of the chain's field) against central differences of the exact force and of the GMR's
     field over a smaller step, and the force odd in theta and restoring."""
     scene = _moments_scene()
-    force = eqx.filter_jit(lambda s, t: jax.vmap(s.tangential_force)(t))
     h = 4e-4
-    f = np.asarray(force(scene, np.array([-h, h, -0.3, 0.3])))
-    out = {k: float(v) for k, v in eqx.filter_jit(lambda s: s.outputs(None))(scene).items()}
+    f = np.asarray(tilt_forces(scene, np.array([-h, h, -0.3, 0.3])))
+    out = {k: float(v) for k, v in moments_outputs(scene).items()}
     np.testing.assert_allclose(out["spring_coefficient"], -(f[1] - f[0]) / (2 * h), rtol=1e-6)
-    gmr = scene.sensor_poses()[0]
-    b = [np.asarray(field(scene, gmr, scene.tip(t) - scene.tip(0.0)))[0, 0] for t in (-h, h)]
+    # the GMR's field among the three points of the field test's program
+    points = np.concatenate([scene.sensor_poses()[0], FIELD_POINTS[1:]])
+    b = [np.asarray(field(scene, points, scene.tip(t) - scene.tip(0.0)))[0, 0] for t in (-h, h)]
     np.testing.assert_allclose(out["field_sensitivity"], (b[1] - b[0]) / (2 * h), rtol=1e-5)
     np.testing.assert_allclose(f[2], -f[3], rtol=1e-10)
     assert f[3] < 0 < out["spring_coefficient"] and out["attraction"] > 0
