@@ -3,6 +3,12 @@
 All quantities are SI (m, T, N, Pa, s, A). Importing the package turns on JAX's
 float64 mode (``jax_enable_x64``): every function computes in float64 unless it is
 handed float32 arrays explicitly.
+
+Importing the package also freezes Python's garbage collector's view of every object alive
+then (``gc.freeze``: JAX's and the package's modules, and whatever the process made
+before): those objects are left out of later cyclic collections, which a command's start
+would otherwise spend a tenth of a second on. Call ``gc.unfreeze()`` after the import where a
+program made, before it, objects in reference cycles that it will drop and needs collected.
 """
 
 import gc
@@ -14,19 +20,20 @@ import importlib.metadata
 # off, each walking the whole heap, cost a tenth of a second of every command's start.
 _collecting = gc.isenabled()
 gc.disable()
+try:
+    import jax
 
-import jax  # noqa: E402
+    jax.config.update("jax_enable_x64", True)
 
-jax.config.update("jax_enable_x64", True)
+    from magdesign import fields as fields
+    from magdesign import mechanics as mechanics
+    from magdesign import transducers as transducers
+    from magdesign import units as units
 
-from magdesign import fields as fields  # noqa: E402
-from magdesign import mechanics as mechanics  # noqa: E402
-from magdesign import transducers as transducers  # noqa: E402
-from magdesign import units as units  # noqa: E402
-
-gc.freeze()
-if _collecting:
-    gc.enable()
+    gc.freeze()
+finally:  # the collector as it was, the import failed or not
+    if _collecting:
+        gc.enable()
 
 __version__ = importlib.metadata.version("magdesign")  # from the installed distribution's metadata
 

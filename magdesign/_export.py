@@ -32,15 +32,13 @@ import functools
 import hashlib
 import importlib.machinery
 import importlib.util
-import io
 import os
 import pickle
 import re
 import sys
 import tempfile
-import threading
 import types
-from concurrent.futures import Future
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import equinox as eqx
@@ -54,7 +52,7 @@ import magdesign
 from magdesign import _tracing
 
 # The layout of an entry; a change makes every older entry a miss.
-ENTRY_FORMAT = 2
+ENTRY_FORMAT = 3
 _state = {"directory": None}
 _ADDRESS = re.compile(r" at 0x[0-9a-fA-F]+")
 
@@ -223,11 +221,15 @@ class _Program:
         try:
             if getattr(compiled._executable._unloaded_executable, "host_callbacks", None):
                 return compiled  # its callbacks are Python objects of this process
-            serialized, _, out_tree = serialize_executable.serialize(compiled)
+            serialized, in_tree, out_tree = serialize_executable.serialize(compiled)
             outputs = pickle.dumps(jax.tree.unflatten(out_tree, [0] * out_tree.num_leaves))
         except Exception:  # an executable that this backend or jax cannot serialize
             return compiled
-        _keep(path, {"text": text, "executable": serialized, "out_tree": outputs})
+        try:  # the arguments' tree, for a later run's load_ahead (a tree with static Python objects may not pickle)
+            inputs = pickle.dumps(jax.tree.unflatten(in_tree, [0] * in_tree.num_leaves))
+        except Exception:
+            inputs = None
+        _keep(path, {"text": text, "executable": serialized, "in_tree": inputs, "out_tree": outputs})
         return compiled
 
 
@@ -328,22 +330,23 @@ def _kept(fn, name, structure, in_tree, avals):
     return _KEPT[memo]
 
 
-# Loading ahead (see load_ahead): {path: Future of (entry, the loaded executable, its
-# arguments' info, flat, and no_kwargs), or None where it failed}; and the paths of the
-# executables that the run since load_ahead read or kept, in order (None: no run).
+# Loading ahead (see load_ahead): {path: Future of (text, the loaded jax.stages.Compiled),
+# or of None where it failed}; and the paths of the executables that the run since
+# load_ahead read or kept, in order (None: no run).
 _AHEAD = {}
 _USED = None
 
 
 def load_ahead(run: str) -> None:
     """Start loading the executables that the last run named ``run`` (a text naming the
-    command, e.g. its arguments and folder) read or kept, each in a thread of its own, so
+    command, e.g. its arguments and folder) read or kept, in threads (as many as CPUs), so
     that a command's second run loads its programs side by side and while it reads its spec
     (XLA loads an executable without Python's lock: a quarter of a second of CPU apiece for
     the design solver's). :func:`_read_executable` takes an executable loaded ahead where
     its entry's text is the one asked for; what the run does not ask for is dropped at
     :func:`remember_run`. Nothing is loaded where keeping is off, on several devices,
-    where no run of that name was remembered, or where this process holds it already."""
+    where no run of that name was remembered, or where this process holds it already; a
+    failure here only leaves the run to load its executables itself."""
     global _USED
     folder = directory()
     _USED = []
@@ -358,21 +361,28 @@ def load_ahead(run: str) -> None:
     _lapack_ready()
     backend = jax.devices()[0].client
     held = {place[0] for place, compiled in _LOADED.values() if compiled is not None}  # an earlier run here
-    for name in names:
-        path = folder / str(name)
-        if path not in _AHEAD and path not in held:
-            _AHEAD[path] = Future()
-            threading.Thread(target=_load, args=(path, backend, _AHEAD[path]), name=f"load {name}").start()
+    paths = [folder / str(name) for name in names]
+    paths = [path for path in paths if path not in _AHEAD and path not in held]
+    if not paths:
+        return
+    pool = ThreadPoolExecutor(min(len(paths), os.cpu_count() or 2), thread_name_prefix="magdesign load")
+    try:
+        for path in paths:
+            _AHEAD[path] = pool.submit(_load, path, backend)
+    except RuntimeError:  # no thread to be had: what was not submitted loads in the run
+        pass
+    finally:
+        pool.shutdown(wait=False)
 
 
-def remember_run(run: str) -> None:
+def remember_run(run: str, succeeded: bool = True) -> None:
     """Keep the names of the executables that this run (since :func:`load_ahead`) read or
-    kept, for the next run named ``run``; drop the executables loaded ahead that it did
-    not ask for."""
+    kept, for the next run named ``run``, where it ``succeeded`` (a failed or interrupted
+    run's list may be cut short); drop the executables loaded ahead that it did not ask for."""
     global _USED
     folder, used, _USED = directory(), _USED, None
     _AHEAD.clear()
-    if folder is None or not used:
+    if folder is None or not used or not succeeded:
         return
     names = [path.name for path in used if path.parent == folder]
     path = _run_path(folder, run)
@@ -390,40 +400,34 @@ def _run_path(folder, run):
     return folder / f"run-{hashlib.sha256(text.encode()).hexdigest()[:32]}.names"
 
 
-def _load(path, backend, future):
-    """Load the executable kept at ``path`` on ``backend`` (the thread of :func:`load_ahead`):
-    ``future`` gets (entry, executable, its arguments' info, flat, no_kwargs), as
-    jax.experimental.serialize_executable.deserialize_and_load makes them before it
-    knows the arguments' tree, or None where it fails."""
+def _load(path, backend):
+    """(text, executable) of the entry kept at ``path``, loaded on ``backend`` for the
+    arguments' tree that the entry keeps (a thread of :func:`load_ahead`), or None where
+    it fails or the entry keeps no tree."""
     try:
         entry = pickle.loads(path.read_bytes())
-        unpickler = serialize_executable._JaxPjrtUnpickler(io.BytesIO(entry["executable"]), backend)
-        unloaded, args_info, no_kwargs = unpickler.load()
-        future.set_result((entry, unloaded.load(), args_info, no_kwargs))
-    except BaseException:  # any failure: the run reads the entry itself
-        future.set_result(None)
+        if entry.get("in_tree") is None:
+            return None
+        in_tree, out_tree = (jax.tree.structure(pickle.loads(entry[tree])) for tree in ("in_tree", "out_tree"))
+        return entry["text"], serialize_executable.deserialize_and_load(entry["executable"], in_tree, out_tree, backend)
+    except Exception:  # any failure: the run reads the entry itself
+        return None
 
 
-def _loaded_ahead(path, text, in_tree):
-    """The executable :func:`load_ahead` loaded from ``path``, for ``text`` and arguments of
-    ``in_tree`` (waiting for its thread), or None where none was or it is for another text."""
+def _loaded_ahead(path, text):
+    """The executable :func:`load_ahead` loaded from ``path`` for ``text`` (waiting for its
+    thread), or None where none was or it is for another text. The text names the
+    arguments' tree, so an executable for the text takes the caller's arguments."""
     ahead = _AHEAD.pop(path, None)
     loaded = None if ahead is None else ahead.result()
-    if loaded is None or loaded[0].get("text") != text:
-        return None
-    entry, executable, args_info, no_kwargs = loaded
-    try:
-        out_tree = jax.tree.structure(pickle.loads(entry["out_tree"]))
-        return jax.stages.Compiled(executable, [], in_tree.unflatten(args_info), out_tree, no_kwargs=no_kwargs)
-    except Exception:  # another jax's Compiled: the entry is read as usual
-        return None
+    return loaded[1] if loaded is not None and loaded[0] == text else None
 
 
 def _read_executable(path, text, in_tree):
     """The executable kept at ``path`` for ``text``, loaded for arguments of ``in_tree``
     (by :func:`load_ahead` where it was), or None where it is missing, unreadable, for
     another text or fails to load."""
-    ahead = _loaded_ahead(path, text, in_tree)
+    ahead = _loaded_ahead(path, text)
     if ahead is not None:
         return ahead
     try:

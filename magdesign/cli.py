@@ -621,9 +621,13 @@ def main(argv=None):
     # not for a sweep that sets up its devices, which must come before JAX starts its backend
     run = None if _sets_up_devices(args) else f"{os.getcwd()}\n{sys.argv[1:] if argv is None else list(argv)}"
     if run is not None:
-        _export.load_ahead(run)
+        try:
+            _export.load_ahead(run)
+        except Exception:  # loading ahead only saves time: the run loads what it needs itself
+            pass
     stdout, sys.stdout = sys.stdout, Stdout(sys.stdout)
     unraisable, sys.unraisablehook = sys.unraisablehook, note_unraisable
+    code = None  # the command's own exit code where it returned (its run is complete)
     try:
         if getattr(args, "plot", None):
             check_output_path(args.plot)
@@ -660,7 +664,7 @@ def main(argv=None):
     finally:
         _progress.enable(None)
         if run is not None:
-            _export.remember_run(run)
+            _export.remember_run(run, succeeded=code is not None)
         _export.enable(kept)
         sys.stdout, sys.unraisablehook = stdout, unraisable
 

@@ -149,7 +149,7 @@ def fewest_chips(
                 raise
             trials.append(GridTrial(grid, grid[0] * grid[1], "refused", reason=str(error)))
             continue
-        if "tolerances" in trial_spec.get("design", {}) and not any(t.result for t in trials):
+        if "tolerances" in trial_spec.get("design", {}) and not any(t.result is not None for t in trials):
             # read by the tolerance command: refused here as there, before the first solve
             with warnings.catch_warnings():  # the spec's warnings are said by problem_from_spec
                 warnings.simplefilter("ignore")
