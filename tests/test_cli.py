@@ -132,9 +132,10 @@ def test_missing_spec_file_exits_2(capsys):
 
 
 # Examples whose simulation compiles for half a minute and more: the pole plate's soft rod is
-# solved by the method of moments (400 cells), the skin's outputs take the Jacobian of every
-# reading through the layer's transforms.
-SLOW_EXAMPLES = ("pole_plate.toml", "skin.toml", "skin_pattern.toml")
+# solved by the method of moments (400 cells), the skins' outputs take the Jacobian of every
+# reading through the layer's transforms (eflesh: through its magnets'; the fast tier
+# simulates it from Python in tests/scene/test_skin_magnets.py).
+SLOW_EXAMPLES = ("eflesh.toml", "pole_plate.toml", "skin.toml", "skin_pattern.toml")
 
 
 @pytest.mark.parametrize(
