@@ -408,8 +408,7 @@ def _start_devices(args):
         if not 1 <= args.devices <= cores:
             raise SpecError(f"--devices {args.devices}: expected 1 to {cores}, the CPU cores this process may use")
         jax.config.update("jax_num_cpu_devices", args.devices)
-    named = [args.coordinator, args.num_processes, args.process_id]
-    if args.distributed or any(value is not None for value in named) or os.environ.get("JAX_COORDINATOR_ADDRESS"):
+    if _distributed(args):
         if args.num_processes is not None and args.num_processes < 1:
             raise SpecError(f"--num-processes {args.num_processes}: expected at least 1")
         if args.process_id is not None and not 0 <= args.process_id < (args.num_processes or args.process_id + 1):
@@ -420,12 +419,18 @@ def _start_devices(args):
         )
 
 
+def _distributed(args) -> bool:
+    """Whether the command runs under jax.distributed (--distributed, a coordinator, process
+    count or id, or JAX_COORDINATOR_ADDRESS); commands without those options never do."""
+    named = [getattr(args, name, None) for name in ("coordinator", "num_processes", "process_id")]
+    distributed = getattr(args, "distributed", False) or os.environ.get("JAX_COORDINATOR_ADDRESS")
+    return bool(distributed) or any(value is not None for value in named)
+
+
 def _sets_up_devices(args) -> bool:
     """Whether the command sets up its devices (:func:`_start_devices`: ``--devices``,
     jax.distributed), which JAX takes only before it starts its backend."""
-    named = [getattr(args, name, None) for name in ("devices", "coordinator", "num_processes", "process_id")]
-    distributed = getattr(args, "distributed", False) or os.environ.get("JAX_COORDINATOR_ADDRESS")
-    return bool(distributed) or any(value is not None for value in named)
+    return getattr(args, "devices", None) is not None or _distributed(args)
 
 
 def run_sweep(args):
