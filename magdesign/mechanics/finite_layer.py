@@ -37,6 +37,7 @@ import jax.numpy as jnp
 from jax import lax
 from jaxtyping import Array, ArrayLike, Float
 
+from magdesign._numerics import safe_div
 from magdesign._validation import check_positive
 from magdesign.mechanics import _axisymmetric
 from magdesign.mechanics._axisymmetric import equilibrium
@@ -168,3 +169,49 @@ def press_displacement(press: LayerPress, points: Float[ArrayLike, "... 2"]) -> 
     nodal = press.displacements[rows[..., :, None], cols[..., None, :]]  # (..., 3, 3, 2)
     u = jnp.einsum("...a,...b,...abk->...k", _quadratic(xi), _quadratic(eta), nodal)
     return jnp.where((r <= r_corners[-1])[..., None], u, 0.0)
+
+
+def press_field(
+    points: Float[ArrayLike, "... 3"],
+    *,
+    centre: Float[ArrayLike, "2"],
+    normal_force: Float[ArrayLike, ""],
+    sphere_radius: Float[ArrayLike, ""],
+    thickness: Float[ArrayLike, ""],
+    material: AbstractHyperelastic,
+    force_floor: float,
+    mesh: tuple = DEFAULT_LAYER_MESH,
+) -> tuple[Float[Array, "... 3"], Float[Array, "... 3"], Float[Array, ""]]:
+    """The press of a sphere centred at ``centre`` (x, y) (m) on the finite-strain layer, as
+    a 3-D field: (displacement u (m), rotation curl(u) / 2 (rad), each (..., 3), at
+    ``points`` (..., 3) = (x, y, z) of the reference layer (m, z from the base); converged,
+    a bool). For a force below ``force_floor`` (N, > 0) the layer is solved at the floor and
+    the field scaled by Fn / floor (linear in Fn there, 0 at rest), so that it can be traced
+    (no check of its inputs) at any Fn >= 0. The rotation about the load's axis is
+    (du_r / dz - du_z / dr) / 2 along e_theta, 0 on the axis (symmetry)."""
+    force = jnp.asarray(normal_force, dtype=float)
+    applied = jnp.maximum(force, force_floor)
+    args = jax.tree.map(lambda x: jnp.asarray(x, dtype=float), (sphere_radius, thickness, material))
+    y, result = _press(*args, applied, tuple(mesh))
+    m = layer_mesh(tuple(mesh))
+    press = LayerPress(
+        depth=y[-1],
+        displacements=(y[:-1] * m.free_u).reshape(m.rows, m.cols, 2),
+        thickness=args[1],
+        result=result,
+        mesh=tuple(mesh),
+    )
+    points = jnp.asarray(points, dtype=float)
+    relative = points[..., :2] - jnp.asarray(centre, dtype=float)
+    r = jnp.sqrt(jnp.sum(relative * relative, axis=-1))
+    rz = jnp.stack([r, points[..., 2]], axis=-1).reshape(-1, 2)
+    meridian = jax.vmap(lambda p: press_displacement(press, p))
+    u_rz = meridian(rz)
+    gradient = jax.vmap(jax.jacfwd(lambda p: press_displacement(press, p)))(rz)  # (n, 2 (u_r, u_z), 2 (r, z))
+    swirl = 0.5 * (gradient[:, 0, 1] - gradient[:, 1, 0])
+    scale = force / applied
+    u_rz, swirl = (scale * u_rz).reshape(r.shape + (2,)), (scale * swirl).reshape(r.shape)
+    cos, sin = safe_div(relative[..., 0], r), safe_div(relative[..., 1], r)
+    u = jnp.stack([u_rz[..., 0] * cos, u_rz[..., 0] * sin, u_rz[..., 1]], axis=-1)
+    rotation = jnp.stack([-swirl * sin, swirl * cos, jnp.zeros_like(swirl)], axis=-1)
+    return u, rotation, result == PressResult.successful

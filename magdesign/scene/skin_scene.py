@@ -29,7 +29,14 @@ Fn / (2 pi R^2 sqrt(1 - r^2 / R^2)) and a shear traction of that shape (the same
 R / h as Hertz's patch).
 
 The layer's displacement field (linear elasticity: displacements small against h) moves its
-particles and turns them with the material's rotation curl(u) / 2. Two field models
+particles and turns them with the material's rotation curl(u) / 2. With ``material``
+"neo_hookean" (static; ``bulk_modulus`` K given, ``poisson_ratio`` the one derived from mu and
+K) the sphere's normal press moves them as the finite-strain layer computes it
+(:func:`magdesign.mechanics.finite_layer.press_field`: its displacement and rotation at the
+cells' centres or the magnets', NaN where its Newton solve did not converge), and the shear
+traction's part is the linear layer's, superposed (first order in the shear: docs/skins.md);
+only the sphere, and only the cells and the discrete magnets, which take point values (the
+linear field takes the linear layer's band-limited displacement). Two field models
 (``field``, static):
 
 - ``"linear"`` (the default): the field to first order in the displacement, the block's
@@ -129,6 +136,8 @@ from magdesign._numerics import safe_div, safe_norm
 from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
 from magdesign.fields.layer_field import finer, gauss_levels, layer_field, pattern
+from magdesign.mechanics.finite_layer import press_field
+from magdesign.mechanics.materials import NeoHookean
 from magdesign.mechanics.skin_layer import (
     ElasticLayer,
     SpectralGrid,
@@ -159,6 +168,8 @@ BACKGROUND_REFERENCE = 50 * uT
 LOAD_UNKNOWNS = ("x", "y", "normal", "shear_x", "shear_y")
 # The magnetised layer's field models (module docstring).
 FIELD_MODELS = ("linear", "cells")
+# The layer's materials (module docstring).
+LAYER_MATERIALS = ("linear", "neo_hookean")
 # What presses the skin, and the load profile of each (module docstring).
 INDENTERS = {"sphere": "hertz", "flat": "flat"}
 # The linear model's default resolution: in-plane nodes at most 1 / NODES_PER_DEPTH of the
@@ -251,6 +262,8 @@ class SkinScene(AbstractScene):
     unmagnetised layer (an eFlesh-like skin), or None for a magnetised layer.
     ``soft``: fixed soft-magnetic parts near the skin (nearby iron, ``[[soft]]``), magnetised
     by the skin's field under each load (:func:`~magdesign.scene.pose.soft_parts_field`).
+    ``material`` (static): "linear" or "neo_hookean" (the press from the finite-strain layer,
+    of ``shear_modulus`` and ``bulk_modulus`` (Pa); module docstring).
     """
 
     thickness: Float[Array, ""]
@@ -276,8 +289,14 @@ class SkinScene(AbstractScene):
     indenter: str = eqx.field(static=True, default="sphere")
     soft: tuple[SoftPart, ...] = ()
     period: Float[Array, ""] | None = None
+    material: str = eqx.field(static=True, default="linear")
+    bulk_modulus: Float[Array, ""] | None = None
 
     def __post_init__(self):
+        if self.material not in LAYER_MATERIALS:
+            raise ValueError(f"material must be one of {LAYER_MATERIALS}, got {self.material!r}")
+        if self.material == "neo_hookean" and (self.bulk_modulus is None or self.indenter != "sphere"):
+            raise ValueError("a neo_hookean layer needs its bulk_modulus and a sphere (indenter 'sphere')")
         if self.field not in FIELD_MODELS:
             raise ValueError(f"field must be one of {FIELD_MODELS}, got {self.field!r}")
         if self.indenter not in INDENTERS:
@@ -353,6 +372,55 @@ class SkinScene(AbstractScene):
             thickness=self.thickness, shear_modulus=self.shear_modulus, poisson_ratio=self.poisson_ratio
         )
 
+    def layer_motion_grid(self, load: SurfaceLoad, cells, grid, levels=None):
+        """Displacement u (m) and rotation curl(u) / 2 (rad), each (n_x, n_y, n_z, 3), at the
+        centres of the layer's ``cells`` (or at ``levels``) under ``load``
+        (:func:`~magdesign.mechanics.skin_layer.layer_displacement_grid`'s arguments): the
+        linear layer's, or with the neo_hookean material the finite-strain layer's press plus
+        the linear layer's shear (module docstring)."""
+        u, rotation = layer_displacement_grid(
+            layer=self.layer(), load=self._linear_part(load), size=self.size, cells=cells, grid=grid, levels=levels
+        )
+        if self.material == "linear":
+            return u, rotation
+        nx, ny, nz = cells
+        side = self.size / jnp.array([nx, ny])
+        x = (jnp.arange(nx) + 0.5) * side[0] - 0.5 * self.size[0]
+        y = (jnp.arange(ny) + 0.5) * side[1] - 0.5 * self.size[1]
+        heights = (np.arange(nz) + 0.5) / nz if levels is None else np.asarray(levels, dtype=float)
+        z = jnp.asarray(heights) * self.thickness
+        points = jnp.stack(jnp.meshgrid(x, y, z, indexing="ij"), axis=-1)
+        du, drotation = self._press(points, load)
+        return u + du, rotation + drotation
+
+    def layer_motion(self, points, load: SurfaceLoad):
+        """Displacement u (m), (..., 3), at ``points`` (..., 3) of the layer under ``load``
+        (:func:`~magdesign.mechanics.skin_layer.layer_displacement`'s): as :meth:`layer_motion_grid`."""
+        u = layer_displacement(points, layer=self.layer(), load=self._linear_part(load))
+        return u if self.material == "linear" else u + self._press(points, load)[0]
+
+    def _linear_part(self, load: SurfaceLoad) -> SurfaceLoad:
+        """The part of ``load`` that the linear layer carries: all of it, or its shear alone
+        where the finite-strain layer carries the press."""
+        if self.material == "linear":
+            return load
+        return eqx.tree_at(lambda l: l.normal_force, load, jnp.zeros_like(load.normal_force))
+
+    def _press(self, points, load: SurfaceLoad):
+        """The finite-strain layer's (u, rotation) at ``points`` (..., 3) under the load's
+        normal force (NaN where its solve did not converge)."""
+        material = NeoHookean(mu=self.shear_modulus, bulk=self.bulk_modulus)
+        u, rotation, converged = press_field(
+            points,
+            centre=load.centre,
+            normal_force=load.normal_force,
+            sphere_radius=self.sphere_radius,
+            thickness=self.thickness,
+            material=material,
+            force_floor=CONTACT_FORCE_FLOOR,
+        )
+        return jnp.where(converged, u, jnp.nan), jnp.where(converged, rotation, jnp.nan)
+
     def contact_radius(self, normal_force: Float[Array, ""]) -> Float[Array, ""]:
         """The contact patch's radius a (m) under ``normal_force`` (N): the sphere's Hertz
         radius, floored, or the flat punch's own (module docstring)."""
@@ -411,9 +479,7 @@ class SkinScene(AbstractScene):
         if resolution != self.resolution:
             grid = band_limited_grid(tuple(factor * p for p in grid.periods), resolution[2])
         heights, _ = gauss_levels(resolution[2])
-        u, rotation = layer_displacement_grid(
-            layer=self.layer(), load=load, size=self.size, cells=resolution, grid=grid, levels=tuple(heights)
-        )
+        u, rotation = self.layer_motion_grid(load, resolution, grid, tuple(heights))
         return layer_field(
             points,
             size=self.size,
@@ -456,16 +522,14 @@ class SkinScene(AbstractScene):
             moved, turned = moved_cells(
                 self.magnets.centres,
                 self.polarization * self.magnets.directions,
-                lambda x: layer_displacement(x, layer=self.layer(), load=load),
+                lambda x: self.layer_motion(x, load),
             )
         else:
             centres, dimension = layer_cells(size=self.size, thickness=self.thickness, cells=self.cells)
             polarization = jnp.broadcast_to(self.polarization * jnp.asarray(self.direction), centres.shape)
             if self.period is not None:
                 polarization = pattern(centres[:, 0], self.period, polarization[0])
-            u, rotation = layer_displacement_grid(
-                layer=self.layer(), load=load, size=self.size, cells=self.cells, grid=self.spectral
-            )
+            u, rotation = self.layer_motion_grid(load, self.cells, self.spectral)
             moved, turned = carried_cells(centres, polarization, u.reshape(-1, 3), rotation.reshape(-1, 3))
         return cells_field(points, centres=moved, dimension=dimension, polarization=turned)
 
