@@ -82,6 +82,9 @@ largest normal force and its shear, with the chips' noise (``noise``, T per axis
                            sqrt(var x + var y) (m), worst and median over the map
     force_resolution_normal / force_resolution_shear   the bound's deviation of Fn and of
                            the shear magnitude's worst axis (N), worst over the map
+    force_resolution_shear_x / force_resolution_shear_y   the bound's deviation of F_x and
+                           of F_y (N), each worst over the map (force_resolution_shear is
+                           the larger of the two)
     crosstalk              the largest |correlation| between a normal and a shear force
                            estimate over the map (-)
     background_force_error the normal-force error (N) that a uniform field of
@@ -305,6 +308,8 @@ class SkinScene(AbstractScene):
         "localisation_median": "m",
         "force_resolution_normal": "N",
         "force_resolution_shear": "N",
+        "force_resolution_shear_x": "N",
+        "force_resolution_shear_y": "N",
         "crosstalk": "1",
         "background_force_error": "N",
         "saturation_ratio": "1",
@@ -578,6 +583,8 @@ class SkinScene(AbstractScene):
             "localisation_median": jnp.median(localisation),
             "force_resolution_normal": jnp.max(bounds.deviation[:, 2]),
             "force_resolution_shear": jnp.max(bounds.deviation[:, 3:5]),
+            "force_resolution_shear_x": jnp.max(bounds.deviation[:, 3]),
+            "force_resolution_shear_y": jnp.max(bounds.deviation[:, 4]),
             "crosstalk": jnp.max(jnp.abs(correlation)),
             "background_force_error": jnp.max(jnp.abs(background)),
             "saturation_ratio": self.chip_range().ratio(self.transduce(result.chip_field)),

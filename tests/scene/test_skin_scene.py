@@ -62,13 +62,14 @@ def test_a_centred_press_is_symmetric(pressed):
 
 @pytest.mark.slow  # compiles the Jacobian of every reading through the layer's transforms
 def test_resolution_outputs_against_differences_and_numpys_fisher_inverse():
-    scene = skin(cells=(4, 4, 1))
+    # the cross stretched along x (arms of 8 mm along x, 4 mm along y): the shear axes' bounds differ
+    scene = skin(cells=(4, 4, 1), chips=jnp.asarray(CHIPS * np.array([4 / 3, 2 / 3])))
     loads = Loads(jnp.array([0.0, 2.0]), shear=jnp.array([[0.0, 0.0], [0.3, 0.0]]))
     got = outputs(scene, loads)
     readings = jax.jit(lambda q: scene.readings_at(q).ravel())
     steps = np.array([1e-6, 1e-6, 1e-4, 1e-4, 1e-4])
     noise = np.full(15, 1 * uT)
-    localisation, normal, shear, background = [], [], [], []
+    localisation, normal, shear_x, shear_y, background = [], [], [], [], []
     for x, y in np.asarray(scene.map_points()):
         state = np.array([x, y, 2.0, 0.3, 0.0])
         columns = []
@@ -80,13 +81,17 @@ def test_resolution_outputs_against_differences_and_numpys_fisher_inverse():
         covariance = np.linalg.inv(weighted.T @ weighted)
         localisation.append(np.sqrt(covariance[0, 0] + covariance[1, 1]))
         normal.append(np.sqrt(covariance[2, 2]))
-        shear.append(np.sqrt(max(covariance[3, 3], covariance[4, 4])))
+        shear_x.append(np.sqrt(covariance[3, 3]))
+        shear_y.append(np.sqrt(covariance[4, 4]))
         uniform = np.tile(np.eye(3) * BACKGROUND_REFERENCE, (1, 5)) / noise
         background.append(np.max(np.abs((covariance @ weighted.T @ uniform.T)[2])))
     np.testing.assert_allclose(got["localisation_worst"], max(localisation), rtol=1e-4)
     np.testing.assert_allclose(got["localisation_median"], np.median(localisation), rtol=1e-4)
     np.testing.assert_allclose(got["force_resolution_normal"], max(normal), rtol=1e-4)
-    np.testing.assert_allclose(got["force_resolution_shear"], max(shear), rtol=1e-4)
+    np.testing.assert_allclose(got["force_resolution_shear_x"], max(shear_x), rtol=1e-4)
+    np.testing.assert_allclose(got["force_resolution_shear_y"], max(shear_y), rtol=1e-4)
+    assert abs(max(shear_x) / max(shear_y) - 1) > 0.05  # the layout tells the axes apart
+    assert got["force_resolution_shear"] == max(got["force_resolution_shear_x"], got["force_resolution_shear_y"])
     np.testing.assert_allclose(got["background_force_error"], max(background), rtol=1e-4)
     assert 0.0 <= float(got["crosstalk"]) <= 1.0 and 0.0 < float(got["saturation_ratio"]) < 1.0
 
