@@ -87,10 +87,12 @@ largest normal force and its shear, with the chips' noise (``noise``, T per axis
                            the larger of the two)
     crosstalk              the largest |correlation| between a normal and a shear force
                            estimate over the map (-)
-    background_force_error the normal-force error (N) that a uniform field of
-                           BACKGROUND_REFERENCE (the Earth's, 50 uT) along the worst axis
-                           causes, through the least-squares fit of all readings, worst over
-                           the map
+    background_force_error the normal-force error (N) that a uniform field along the worst
+                           axis causes, through the least-squares fit of all readings, worst
+                           over the map; the field's size is the listed background effect's
+                           |B| (the field the spec states the chips sit in), else
+                           BACKGROUND_REFERENCE (the Earth's, 50 uT)
+                           (:meth:`SkinScene.background_reference`)
     saturation_ratio       the largest |reading| over every chip, axis and load point of the
                            sweep over the chips' range (-)
     saturation_force       the largest normal force (N) that presses no chip axis out of its
@@ -141,7 +143,7 @@ from magdesign.mechanics.skin_layer import (
     spectral_grid,
 )
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
-from magdesign.scene.effects import AbstractEffect, judged_saturation
+from magdesign.scene.effects import AbstractEffect, Background, judged_saturation
 from magdesign.scene.loads import Loads
 from magdesign.scene.pose import SoftPart, soft_parameter_paths, soft_parts_field
 from magdesign.transducers import Hall3D, cramer_rao
@@ -156,7 +158,8 @@ SATURATION_FORCE_CAP = 1e3
 # or after SATURATION_STEPS (module docstring).
 SATURATION_RTOL = 1e-6
 SATURATION_STEPS = 8
-# A uniform field of the Earth's size (T), the reference of background_force_error.
+# A uniform field of the Earth's size (T), the reference of background_force_error where the
+# scene lists no background.
 BACKGROUND_REFERENCE = 50 * uT
 # The unknowns of a load point and their units, the order of the Jacobian's columns.
 LOAD_UNKNOWNS = ("x", "y", "normal", "shear_x", "shear_y")
@@ -500,15 +503,23 @@ class SkinScene(AbstractScene):
         field's effects) up to the readings' own effects, whose noise the bounds take."""
         return chain(self, state[None], without=STATIC_WITHOUT).chip_field[0]
 
+    def background_reference(self) -> Float[Array, ""]:
+        """The size (T) of the uniform field whose force error ``background_force_error``
+        states: |B| of the listed background effects' field (the field the chips sit in),
+        else BACKGROUND_REFERENCE (the Earth's, 50 uT). A stated zero field gives 0."""
+        stated = [effect.field_ for effect in self.effects if isinstance(effect, Background)]
+        return safe_norm(sum(stated)) if stated else jnp.asarray(BACKGROUND_REFERENCE)
+
     def resolution_at(self, state: Float[Array, "5"]):
         """(Cramer-Rao :class:`~magdesign.inverse.Bound` of the load state from all readings,
-        the normal-force error (N) of a BACKGROUND_REFERENCE field along x, y and z (3,))."""
+        the normal-force error (N) of a uniform field of :meth:`background_reference`'s size
+        along x, y and z (3,))."""
         jacobian = jax.jacfwd(lambda q: self.readings_at(q).ravel())(state)  # (3 S, 5)
         noise = jnp.tile(self.noise, len(self.chips))
         bound = cramer_rao(jacobian, noise)
         # the least-squares fit's response to a uniform field added to every chip
         weighted = jacobian / noise[:, None]
-        fields = jnp.tile(jnp.eye(3) * BACKGROUND_REFERENCE, (1, len(self.chips))) / noise  # (3, 3 S)
+        fields = jnp.tile(jnp.eye(3) * self.background_reference(), (1, len(self.chips))) / noise  # (3, 3 S)
         shift = jnp.einsum("ij,kj->ki", bound.covariance @ weighted.T, fields)
         return bound, shift[:, 2]
 

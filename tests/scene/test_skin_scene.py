@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from magdesign.scene.core import outputs, simulate
-from magdesign.scene.effects import Placement
+from magdesign.scene.effects import Background, Placement
 from magdesign.scene.loads import Loads
 from magdesign.scene.skin_scene import BACKGROUND_REFERENCE, SkinScene
 from magdesign.transducers import mlx90393
@@ -117,6 +117,33 @@ def test_the_bounds_read_the_placed_chips():
     nominal = skin(cells=(4, 4, 2))
     np.testing.assert_allclose(placed.readings_at(state), shallower.readings_at(state), rtol=1e-12, atol=1e-15)
     assert np.max(np.abs(placed.readings_at(state) - nominal.readings_at(state))) > 1e-6
+
+
+def test_the_background_error_is_stated_for_the_listed_background(monkeypatch):
+    """background_force_error's uniform field has the listed background's size, else the
+    Earth's 50 uT. The chips' readings are replaced by a fixed linear map of the load state
+    (a known Jacobian, so no layer to compile); the error is numpy's least-squares response
+    to that field along z, and scales with the field's size (the fit is linear in it)."""
+    jacobian = np.random.default_rng(0).normal(size=(15, 5)) * np.array([1e-3, 1e-3, 1e-4, 1e-4, 1e-4])
+    monkeypatch.setattr(SkinScene, "readings_at", lambda self, state: (jnp.asarray(jacobian) @ state).reshape(5, 3))
+    noise = np.full(15, 1 * uT)
+    weighted = jacobian / noise[:, None]
+    response = np.linalg.inv(weighted.T @ weighted) @ weighted.T @ (np.tile(np.eye(3), (1, 5)) / noise).T
+    state = jnp.array([1 * mm, 0.5 * mm, 0.05, 0.01, 0.0])
+    stated = {
+        "none": ((), BACKGROUND_REFERENCE),
+        "earth": ((Background(field_=jnp.array([50 * uT, 0.0, 0.0])),), 50 * uT),
+        "strong": ((Background(field_=jnp.array([300 * uT, 0.0, -400 * uT])),), 500 * uT),
+    }
+    errors = {}
+    for name, (effects, size) in stated.items():
+        scene = skin(effects=effects)
+        assert float(scene.background_reference()) == pytest.approx(size, rel=1e-12)
+        _, errors[name] = scene.resolution_at(state)
+        np.testing.assert_allclose(errors[name], size * response[2], rtol=1e-9)
+    # the error is linear in the field's size: 500 uT against 50 uT, ten times
+    np.testing.assert_allclose(errors["strong"], 10.0 * errors["earth"], rtol=1e-9)
+    np.testing.assert_allclose(errors["earth"], errors["none"], rtol=1e-12)
 
 
 @pytest.mark.slow  # compiles the linear field at three resolutions
