@@ -131,6 +131,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from magdesign._numerics import safe_div, safe_norm
+from magdesign._tracing import on_device
 from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
 from magdesign.fields.layer_field import finer, gauss_levels, layer_field, pattern
@@ -219,11 +220,14 @@ def _held(tree):
 
 
 def _chip_pairs(chips) -> tuple[tuple[Float[Array, ""], Float[Array, ""]], ...]:
-    """Chips' positions (S, 2) as S pairs of scalars (x, y): leaves a design sets one by one."""
-    rows = jnp.asarray(chips, dtype=float)
+    """Chips' positions (S, 2) as S pairs of scalars (x, y): leaves a design sets one by one.
+    Concrete positions are split in numpy and put on the device one by one (no program to
+    compile, :func:`~magdesign._tracing.on_device`); traced ones by indexing."""
+    concrete = _concrete(chips)
+    rows = jnp.asarray(chips, dtype=float) if concrete is None else np.asarray(concrete, dtype=float)
     if rows.ndim != 2 or rows.shape[-1] != 2:
         raise ValueError(f"chips must be the chips' (x, y), shape (S, 2), got shape {rows.shape}")
-    return tuple((row[0], row[1]) for row in rows)
+    return tuple((on_device(row[0]), on_device(row[1])) for row in rows)
 
 
 class SkinMagnets(eqx.Module):
@@ -342,10 +346,12 @@ class SkinScene(AbstractScene):
         """The listed saturation effect, else the Hall chips' own range per axis."""
         return judged_saturation(self.effects, self.hall.full_scale)
 
-    def chip_positions(self) -> Float[Array, "s 2"]:
-        """The chips' (x, y) (m), (S, 2): ``chips``, times ``pitch`` where one is given."""
-        positions = jnp.stack([jnp.stack(chip) for chip in self.chips])
-        return positions if self.pitch is None else positions * self.pitch
+    def chip_positions(self, *, xp=jnp) -> Float[Array, "s 2"]:
+        """The chips' (x, y) (m), (S, 2): ``chips``, times ``pitch`` where one is given.
+        ``xp``: the array module, ``jax.numpy`` (traceable) or ``numpy`` (a concrete scene's
+        numbers without a JAX program: the spec's checks)."""
+        positions = xp.stack([xp.stack(chip) for chip in self.chips])
+        return positions if self.pitch is None else positions * xp.asarray(self.pitch)
 
     def sensor_poses(self):
         chips = self.chip_positions()
@@ -361,17 +367,19 @@ class SkinScene(AbstractScene):
             thickness=self.thickness, shear_modulus=self.shear_modulus, poisson_ratio=self.poisson_ratio
         )
 
-    def contact_radius(self, normal_force: Float[Array, ""]) -> Float[Array, ""]:
-        """The contact patch's radius a (m) under ``normal_force`` (N): the sphere's Hertz
-        radius, floored, or the flat punch's own (module docstring)."""
+    def contact_radius(self, normal_force: Float[Array, "..."], *, xp=jnp) -> Float[Array, "..."]:
+        """The contact patch's radius a (m) under ``normal_force`` (N, (...,)), shape
+        (...,): the sphere's Hertz radius, floored, or the flat punch's own (module
+        docstring). ``xp``: the array module (:meth:`chip_positions`)."""
+        radius = xp.asarray(self.sphere_radius)
         if self.indenter == "flat":
-            return jnp.broadcast_to(self.sphere_radius, jnp.shape(normal_force))
-        e_star = 2.0 * self.shear_modulus / (1.0 - self.poisson_ratio)
-        force = jnp.maximum(normal_force, CONTACT_FORCE_FLOOR)
-        return (3.0 * force * self.sphere_radius / (4.0 * e_star)) ** (1.0 / 3.0)
+            return xp.broadcast_to(radius, xp.shape(normal_force))
+        e_star = 2.0 * xp.asarray(self.shear_modulus) / (1.0 - xp.asarray(self.poisson_ratio))
+        force = xp.maximum(normal_force, CONTACT_FORCE_FLOOR)
+        return (3.0 * force * radius / (4.0 * e_star)) ** (1.0 / 3.0)
 
     def contact_strain(
-        self, normal_force: Float[Array, "..."], shear_force: Float[Array, "... 2"]
+        self, normal_force: Float[Array, "..."], shear_force: Float[Array, "... 2"], *, xp=jnp
     ) -> Float[Array, "..."]:
         """The strain under the contact (-), shape (...,): the displacement of the patch's
         centre, its depth delta and its tangential travel u_t, over the patch's radius a,
@@ -389,13 +397,15 @@ class SkinScene(AbstractScene):
 
         On a bonded layer the depth is smaller than the half-space's (by 7 % at a / h = 0.1,
         22 % at 0.3: :mod:`magdesign.mechanics.skin_layer`), so this overstates the strain
-        a little there."""
-        radius = self.contact_radius(normal_force)
-        g, nu = self.shear_modulus, self.poisson_ratio
+        a little there. ``xp``: the array module (:meth:`chip_positions`)."""
+        radius = self.contact_radius(normal_force, xp=xp)
+        g, nu = xp.asarray(self.shear_modulus), xp.asarray(self.poisson_ratio)
         shape = 1.5 if self.indenter == "sphere" else 1.0  # Hertz's centre over the flat punch's
-        tangential = (2.0 - nu) * jnp.asarray(shear_force, dtype=float)
-        normal = (2.0 * (1.0 - nu) * jnp.asarray(normal_force, dtype=float))[..., None]
-        travel = safe_norm(jnp.concatenate([normal, tangential], axis=-1))  # finite slope at rest too
+        tangential = (2.0 - nu) * xp.asarray(shear_force, dtype=float)
+        normal = (2.0 * (1.0 - nu) * xp.asarray(normal_force, dtype=float))[..., None]
+        travels = xp.concatenate([normal, tangential], axis=-1)
+        # traced: a finite slope at rest too; numpy's numbers need no derivative
+        travel = safe_norm(travels) if xp is jnp else np.linalg.norm(travels, axis=-1)
         return shape * travel / (8.0 * g * radius * radius)
 
     def surface_load(self, state: Float[Array, "5"]) -> SurfaceLoad:
@@ -480,22 +490,23 @@ class SkinScene(AbstractScene):
     def transduce(self, field):
         return field
 
-    def map_points(self) -> Float[Array, "m 2"]:
+    def map_points(self, *, xp=jnp) -> Float[Array, "m 2"]:
         """The outputs' contact positions (M, 2) (m): a ``map_grid`` over the ``map_size``
         area centred on the skin's centre (the origin), or where it is None over the chips'
-        bounding box, corners included; along an axis of one point, the area's middle."""
+        bounding box, corners included; along an axis of one point, the area's middle.
+        ``xp``: the array module (:meth:`chip_positions`)."""
         if self.map_size is None:
-            chips = self.chip_positions()
-            low, high = jnp.min(chips, axis=0), jnp.max(chips, axis=0)
+            chips = self.chip_positions(xp=xp)
+            low, high = xp.min(chips, axis=0), xp.max(chips, axis=0)
         else:
-            high = jnp.asarray(self.map_size) / 2
+            high = xp.asarray(self.map_size) / 2
             low = -high
         xs, ys = (
-            jnp.linspace(low[i], high[i], n) if n > 1 else ((low[i] + high[i]) / 2)[None]
+            xp.linspace(low[i], high[i], n) if n > 1 else ((low[i] + high[i]) / 2)[None]
             for i, n in enumerate(self.map_grid)
         )
-        xx, yy = jnp.meshgrid(xs, ys, indexing="ij")
-        return jnp.stack([xx.ravel(), yy.ravel()], axis=-1)
+        xx, yy = xp.meshgrid(xs, ys, indexing="ij")
+        return xp.stack([xx.ravel(), yy.ravel()], axis=-1)
 
     def readings_at(self, state: Float[Array, "5"]) -> Float[Array, "s 3"]:
         """Every chip's field (T, chip frame), (S, 3), under one load state (x, y, Fn, F_x,
