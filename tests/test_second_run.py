@@ -20,8 +20,9 @@ from magdesign._tracing import on_device, random_key, strongly_typed
 DEFAULT_SPEC = str(Path(__file__).resolve().parent.parent / "magdesign" / "design" / "default.toml")
 
 # Prints {"compiled": n, "traced": n} after running argv[1] in a new process: a command
-# (the rest of argv its arguments) or "spec" (the spec stage of the default design and
-# the host-side checks a command makes of it).
+# (the rest of argv its arguments), "spec" (the spec stage of the default design and
+# the host-side checks a command makes of it) or "scenes" (the scenes of the spec files
+# that follow, with their checks).
 _COUNTED = textwrap.dedent(
     """
     import contextlib, io, json, sys
@@ -38,6 +39,14 @@ _COUNTED = textwrap.dedent(
         with_parameters(scene, {v.name: float(v.start) for v in problem.variables})
         random_key(0)
         float(bound(1.0, 1.01, True))
+    elif sys.argv[1] == "scenes":  # the scenes of the specs argv[2:] and the checks of their loads
+        import warnings
+        from magdesign.spec.design import load_spec
+        from magdesign.spec.scene import scene_from_spec
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the examples' own plausibility warnings
+            for path in sys.argv[2:]:
+                scene_from_spec(load_spec(path))
     else:
         from magdesign import cli
         with contextlib.redirect_stdout(io.StringIO()):
@@ -60,6 +69,14 @@ def _counted(*arguments, cache=None):
 
 def test_the_spec_stage_compiles_and_traces_nothing_in_a_new_process():
     assert _counted("spec") == {"compiled": 0, "traced": 0}
+
+
+def test_a_skins_spec_stage_compiles_and_traces_nothing_in_a_new_process():
+    """A skin's checks (its contact patch and strain, the outputs' map, the chips) compute
+    with numpy, and its arrays are made without programs."""
+    examples = Path(__file__).resolve().parent.parent / "examples"
+    skins = [str(examples / f"{name}.toml") for name in ("skin", "skin_pattern", "eflesh")]
+    assert _counted("scenes", *skins) == {"compiled": 0, "traced": 0}
 
 
 @pytest.mark.slow
