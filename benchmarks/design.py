@@ -20,7 +20,9 @@ Prints:
   (``--second-run-only``: these rows alone); then where a second Reissner solve goes
   (imports, spec, solve, estimate, report; within solve and estimate: loading the kept
   executables or waiting for the threads that load them ahead, lowering, loading from the compilation cache and compiling, from JAX's
-  monitoring events, and the rest: tracing and running);
+  monitoring events, and the rest: tracing and running); then the same solve after an upgrade
+  of magdesign (the exported and kept programs miss, the compilation cache holds the same
+  programs): the run after it and the median of five runs after that;
 - where that first call goes, in a new process without the cache: the seconds (wall and
   CPU) of tracing the solver's program, lowering it to StableHLO and compiling it with XLA,
   and the compiled program's size (fusions: XLA compiles each into a kernel of its own);
@@ -37,6 +39,7 @@ Prints:
 
 import importlib
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -231,7 +234,13 @@ def second_run_rows(skip_axisymmetric):
         ]
         if not skip_axisymmetric:
             commands.insert(2, ("solve (axisymmetric confirmation)", ["solve", "--json"]))
-        env = {**os.environ, "MAGDESIGN_CACHE_DIR": cache, "MAGDESIGN_NO_CACHE": "", "MAGDESIGN_NO_EXPORT": ""}
+        env = {
+            **os.environ,
+            "MAGDESIGN_CACHE_DIR": cache,
+            "MAGDESIGN_NO_CACHE": "",
+            "MAGDESIGN_NO_EXPORT": "",
+            "MAGDESIGN_NO_RECOMPILE": "",
+        }
         rows = [("second run, new process", "first run wall (s)", "wall (s), median", "CPU (s), median", "walls (s)")]
         for name, arguments in commands:
             first = _command(arguments, env)[0] if not name.startswith("  ") else float("nan")
@@ -265,6 +274,24 @@ def second_run_rows(skip_axisymmetric):
             values = np.median(np.array(values), axis=0)
             rows.append((name, f"{values[0]:.2f}", f"{values[1]:.2f}" if len(values) > 1 else ""))
         table(rows)
+        print()
+        upgrade_rows(cache, env)
+
+
+def upgrade_rows(cache, env):
+    """`solve --fidelity reissner` after an upgrade of magdesign, in new processes: the
+    exported and kept programs all miss (new versions(); here their folder is emptied) while
+    the compilation cache holds the same programs. The run after the upgrade (which compiles
+    the kept programs once more, magdesign._export._Program._keep) and the median of
+    SECOND_RUNS runs after it, wall and CPU."""
+    arguments = ["solve", "--fidelity", "reissner", "--json"]
+    shutil.rmtree(os.path.join(cache, "exported"))
+    upgraded = _command(arguments, env)
+    walls, cpus = zip(*[_command(arguments, env) for _ in range(SECOND_RUNS)])
+    rows = [("solve --fidelity reissner after an upgrade", "wall (s)", "CPU (s)")]
+    rows.append(("the run after the upgrade", f"{upgraded[0]:.2f}", f"{upgraded[1]:.2f}"))
+    rows.append(("the runs after it, median", f"{np.median(walls):.2f}", f"{np.median(cpus):.2f}"))
+    table(rows)
 
 
 def first_call_rows():

@@ -26,6 +26,9 @@ usual.
 
 Off unless :func:`enable` names a folder (the command does for its run, see
 ``magdesign._cache.export_directory``); MAGDESIGN_NO_EXPORT=1 keeps it off.
+MAGDESIGN_NO_RECOMPILE=1 keeps an executable that JAX read from its compilation cache as it
+is, unkept, instead of compiling it once more to keep it (see :meth:`_Program._keep`): the
+test suite's choice, whose every edit of magdesign is an "upgrade".
 """
 
 import functools
@@ -47,23 +50,26 @@ import jax.numpy as jnp
 import jaxlib
 import numpy as np
 from jax.experimental import serialize_executable
+from jax.experimental.compilation_cache import compilation_cache
 
 import magdesign
 from magdesign import _tracing
 
 # The layout of an entry; a change makes every older entry a miss.
 ENTRY_FORMAT = 3
-_state = {"directory": None}
+_state = {"directory": None, "recompile": True}
 _ADDRESS = re.compile(r" at 0x[0-9a-fA-F]+")
 
 
 def enable(directory):
     """Keep exported programs in ``directory`` (a path; None: off). MAGDESIGN_NO_EXPORT set
     to anything but "" or "0" keeps it off, and so does a Python without the flatbuffers
-    package."""
+    package; MAGDESIGN_NO_RECOMPILE so set keeps no executable read from JAX's compilation
+    cache (see the module's docstring)."""
     if os.environ.get("MAGDESIGN_NO_EXPORT", "") not in ("", "0") or importlib.util.find_spec("flatbuffers") is None:
         directory = None  # turned off, or no flatbuffers, which jax.export's serialization needs
     _state["directory"] = None if directory is None else Path(directory)
+    _state["recompile"] = os.environ.get("MAGDESIGN_NO_RECOMPILE", "") in ("", "0")
 
 
 def directory():
@@ -147,7 +153,9 @@ class _Program:
     options, then the error mode, the arguments' tree, shapes, dtypes and weak types, the
     backend, device kind, XLA_FLAGS and :func:`versions`) keys it as :func:`_kept`'s does;
     one that is missing, damaged, for another text or fails to load is compiled the
-    usual way (through the exported program and the compilation cache) and kept again.
+    usual way (through the exported program and the compilation cache) and kept again;
+    where JAX read it from its compilation cache, it is compiled once more to be kept
+    (see :meth:`_keep`).
     An executable with host callbacks is never kept. Off where :func:`directory` is, on
     several devices and inside another program's trace."""
 
@@ -155,9 +163,12 @@ class _Program:
         self._body, self._options, self._program = body, options, program
 
     @functools.cached_property
+    def _compiler_options(self):
+        return self._options() if callable(self._options) else self._options
+
+    @functools.cached_property
     def _jitted(self):
-        options = self._options() if callable(self._options) else self._options
-        return jax.jit(self._body, compiler_options=options)
+        return jax.jit(self._body, compiler_options=self._compiler_options)
 
     def __getattr__(self, name):  # trace, eval_shape, ... as jax.jit's
         return getattr(self._jitted, name)
@@ -167,7 +178,7 @@ class _Program:
         if place is None:
             return self._jitted(*args)
         if compiled is None:
-            compiled = self._keep(place, self._jitted.lower(*args).compile)
+            compiled = self._keep(place, args, self._jitted.lower(*args).compile)
         return compiled(*args)
 
     def lower(self, *args):
@@ -178,7 +189,7 @@ class _Program:
         lowered = self._jitted.lower(*args)
         if place is None:
             return lowered
-        return types.SimpleNamespace(compile=lambda: self._keep(place, lowered.compile))
+        return types.SimpleNamespace(compile=lambda: self._keep(place, args, lowered.compile))
 
     def _executable(self, args):
         """(place, the kept executable or None) for ``args`` (arrays or ShapeDtypeStructs);
@@ -208,15 +219,26 @@ class _Program:
             _USED.append(place[0])  # for the next run's load_ahead, loaded here or compiled and kept
         return (memo, *place), compiled
 
-    def _keep(self, place, compile):
-        """The jax.stages.Compiled that ``compile()`` returns, kept in memory and written
-        to its entry where it was compiled here: an executable that JAX read from its
-        compilation cache serializes without its kernels (its entry would fail when run)."""
+    def _keep(self, place, args, compile):
+        """The jax.stages.Compiled that ``compile()`` returns for ``args``, kept in memory and
+        written to its entry. An executable that JAX read from its persistent compilation
+        cache serializes without its kernels (its entry would fail when run), and a cache
+        that holds the program while the entry is missing is what every run meets after
+        an upgrade of magdesign (new :func:`versions`, the same program): such a program is
+        compiled once more with the cache bypassed (:meth:`_compiled_afresh`), and that
+        executable is kept and returned; with MAGDESIGN_NO_RECOMPILE (see :func:`enable`),
+        the executable read from the cache is returned and nothing is kept."""
         memo, path, text = place
         hits = _CACHE_HITS[0]
         compiled = compile()
+        fresh = _CACHE_HITS[0] == hits
+        if not fresh and _state["recompile"]:
+            try:
+                compiled, fresh = self._compiled_afresh(args, memo[2]), True
+            except Exception:  # the executable read from the cache still answers; nothing is kept
+                pass
         _LOADED[memo] = (path, text), compiled
-        if _CACHE_HITS[0] != hits:
+        if not fresh:
             return compiled
         try:
             if getattr(compiled._executable._unloaded_executable, "host_callbacks", None):
@@ -231,6 +253,33 @@ class _Program:
             inputs = None
         _keep(path, {"text": text, "executable": serialized, "in_tree": inputs, "out_tree": outputs})
         return compiled
+
+    def _compiled_afresh(self, args, as_nan):
+        """The executable of ``args`` (arrays or ShapeDtypeStructs) compiled by XLA, JAX's
+        persistent compilation cache bypassed, traced with failed checks as NaN where
+        ``as_nan`` (the error mode the entry's text names). The body is jitted as a function
+        of its own, so that neither its lowering nor its executable is one that JAX holds in
+        memory (a ``Lowered`` and JAX's compilation memo answer with the executable read
+        from the cache). The cache is turned off for the whole process meanwhile (JAX's
+        switch is global, and JAX remembers its answer to "is the cache used" until
+        ``reset_cache``), then turned back as it was; the thread that calls a program is the
+        only one that compiles (:func:`load_ahead`'s threads deserialize)."""
+        body = self._body
+
+        def afresh(*inner):
+            return body(*inner)
+
+        afresh.__name__ = afresh.__qualname__ = body.__name__  # the compiled program's name
+        saved = jax.config.jax_enable_compilation_cache, _tracing._errors["as_nan"]
+        jax.config.update("jax_enable_compilation_cache", False)
+        compilation_cache.reset_cache()
+        _tracing._errors["as_nan"] = as_nan
+        try:
+            return jax.jit(afresh, compiler_options=self._compiler_options).lower(*args).compile()
+        finally:
+            _tracing._errors["as_nan"] = saved[1]
+            jax.config.update("jax_enable_compilation_cache", saved[0])
+            compilation_cache.reset_cache()
 
 
 def filter_jit(fn, name: str):

@@ -168,11 +168,11 @@ def run_solve(args):
         raise SpecError("--accuracy: it picks every model's level itself; give --accuracy or --fidelity, not both")
     if design_grids(spec) is not None:  # candidate chip grids: the design at each, fewest chips first
         return _solve_grids(args, spec, began)
-    problem, _ = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
+    problem, scene = problem_from_spec(spec, fidelity=None if auto else args.fidelity)
     if "tolerances" in spec.get("design", {}):  # read by the tolerance command: one rule for both
         with warnings.catch_warnings():  # the spec's warnings are said once, above
             warnings.simplefilter("ignore")
-            tolerance_problem_from_spec(spec, fidelity=None if auto else args.fidelity)
+            tolerance_problem_from_spec(spec, fidelity=None if auto else args.fidelity, built=(problem, scene))
     start = accurate = None
     if accuracy is not None:
         stage(f"solving to an accuracy of {accuracy:.3g}, every model from its cheapest level ({FIRST_CALL})")

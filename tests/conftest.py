@@ -12,6 +12,11 @@ from magdesign._tracing import free_programs_near_mapping_limit
 # tests start load the programs that another one compiled. tests/test_cli.py checks the
 # cache itself with folders of its own.
 os.environ.setdefault("MAGDESIGN_CACHE_DIR", str(Path(__file__).resolve().parent.parent / ".pytest_cache" / "jax"))
+# Every edit of magdesign makes the kept executables of the commands the tests run a miss
+# (magdesign._export.versions) while JAX's cache holds the same programs: the tests load
+# them from JAX's cache rather than compile each once more to keep it, which a user's
+# command does after an upgrade (tests/test_export_cache.py and test_second_run.py check it).
+os.environ.setdefault("MAGDESIGN_NO_RECOMPILE", "1")
 jax.config.update("jax_enable_x64", True)
 use_compilation_cache()
 

@@ -6,6 +6,7 @@ import copy
 import json
 import os
 import pickle
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -138,21 +139,77 @@ def _run_new_process(folder, **environment):
     return json.loads(done.stdout.splitlines()[-1])
 
 
-def test_an_executable_read_from_the_compilation_cache_is_not_kept(kept, tmp_path, fresh_compilation_cache):
-    # such an executable serializes without its kernels: read back, it would fail when run
+def _events():
+    """The names of JAX's monitoring events (plain and timed) while the block runs."""
+    heard = []
+
+    def event(name, **kwargs):
+        heard.append(name)
+
+    def timed(name, seconds, **kwargs):
+        heard.append(name)
+
+    jax.monitoring.register_event_listener(event)
+    jax.monitoring.register_event_duration_secs_listener(timed)
+    return heard, lambda: (
+        jax.monitoring.unregister_event_listener(event),
+        jax.monitoring.unregister_event_duration_listener(timed),
+    )
+
+
+@pytest.mark.parametrize("recompile", [True, False], ids=["as a user's command", "MAGDESIGN_NO_RECOMPILE"])
+def test_after_an_upgrade_a_program_in_the_compilation_cache_is_kept_and_then_loaded(
+    kept, fresh_compilation_cache, monkeypatch, recompile
+):
+    """An upgrade of magdesign (new versions(): every entry of ours misses) leaves JAX's
+    compilation cache holding the same program. The executable JAX reads from it serializes
+    without its kernels (its entry would fail when run), so the program is compiled once
+    more to be kept, and the run after loads it: no trace, no compile, no cache read. With
+    MAGDESIGN_NO_RECOMPILE (the tests' choice), what JAX read is run as it is, and not kept."""
     from magdesign._cache import use_compilation_cache
 
+    monkeypatch.setenv("MAGDESIGN_NO_RECOMPILE", "" if recompile else "1")
+    _export.enable(kept)
     use_compilation_cache()
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-    program = lambda: _export.jit(lambda x: jnp.cumsum(jnp.sin(x)), "toy-cached", "cumsum sin(x)")  # noqa: E731
-    x = np.array([0.5, 1.0])
-    np.testing.assert_allclose(program()(x), np.cumsum(np.sin(x)), rtol=1e-15)  # compiled: kept
-    assert len(list(kept.glob("toy-cached-*.executable"))) == 1
-    for path in kept.glob("toy-cached-*.executable"):
-        path.unlink()
-    _new_process()
-    np.testing.assert_allclose(program()(x), np.cumsum(np.sin(x)), rtol=1e-15)  # read from the cache
-    assert not list(kept.glob("toy-cached-*.executable"))
+    x, x3 = np.array([0.5, 1.0]), np.array([0.25, 0.5, 2.0])
+    expected = np.cumsum(np.sin(x))  # independent: numpy
+
+    def run():  # one command's run in a new process: its events
+        _new_process()
+        heard, stop = _events()
+        try:
+            program = _export.jit(lambda x: jnp.cumsum(jnp.sin(x)), "toy-cached", "cumsum sin(x)")
+            np.testing.assert_allclose(program(x), expected, rtol=1e-15)
+            # and through lower: compiled for a shape alone (another entry), as a sweep does
+            compiled = program.lower(jax.ShapeDtypeStruct((3,), jnp.float64)).compile()
+            np.testing.assert_allclose(compiled(x3), np.cumsum(np.sin(x3)), rtol=1e-15)
+        finally:
+            stop()
+        return {name: heard.count(f"/jax/{name}") for name in ("compilation_cache/cache_hits", *COMPILE_STAGES)}
+
+    first = run()  # JAX's cache empty: the two programs compiled, written to JAX's cache, kept
+    assert first["compilation_cache/cache_hits"] == 0 and first["core/compile/backend_compile_duration"] == 2
+    shutil.rmtree(kept)  # the upgrade: our entries miss
+    second = run()
+    third = run()
+    assert second["compilation_cache/cache_hits"] == 2  # read from JAX's cache (a compile event too) ...
+    if recompile:
+        # the kept executables run (the assertions in run), and nothing is made
+        assert all(count == 0 for count in third.values()), third
+        assert second["core/compile/backend_compile_duration"] == 4  # ... and compiled again, to be kept
+    else:  # such an executable serializes without its kernels: it is never kept
+        assert not list(kept.glob("toy-cached-*.executable"))
+        for run_after in (second, third):  # each reads both from JAX's cache again, and compiles nothing
+            assert run_after["compilation_cache/cache_hits"] == run_after["core/compile/backend_compile_duration"] == 2
+
+
+# JAX's events of making a program: tracing, lowering, compiling (one each per program).
+COMPILE_STAGES = (
+    "core/compile/jaxpr_trace_duration",
+    "core/compile/jaxpr_to_mlir_module_duration",
+    "core/compile/backend_compile_duration",
+)
 
 
 def test_a_new_process_calls_the_kept_executable_without_compiling(tmp_path):

@@ -8,11 +8,13 @@ from pathlib import Path
 
 import pytest
 
+import magdesign.cli as cli
+import magdesign.spec.tolerance as tolerance
 from magdesign.cli import main
 from magdesign.design.report import _missed
 from magdesign.scene import scene_from_spec
 from magdesign.spec import sizes
-from magdesign.spec.design import load_spec
+from magdesign.spec.design import load_spec, problem_from_spec
 from magdesign.spec.tolerance import tolerance_problem_from_spec
 from magdesign.units import SpecError
 
@@ -262,6 +264,26 @@ def test_solve_refuses_a_tolerance_that_the_tolerance_command_refuses(tmp_path, 
     path = _spec(tmp_path, TOLERANCES, ('"magnet.remanence" = "2 %"', '"magnet.remanence" = "500 %"'))
     for argv in (["solve", path, "--fidelity", "reissner"], ["tolerance", path, "--samples", "10"]):
         _refused(capsys, argv, "design.tolerances.magnet.remanence", "physical domain")
+
+
+def test_solve_builds_a_toleranced_spec_once(tmp_path, monkeypatch, capsys):
+    """solve reads [design.tolerances] on the problem it built: the spec stage runs once."""
+    built = []
+
+    def counted(spec, **options):
+        built.append(options)
+        return problem_from_spec(spec, **options)
+
+    def stop(*args):
+        raise RuntimeError("stopped before the solve")
+
+    monkeypatch.setattr(cli, "problem_from_spec", counted)
+    monkeypatch.setattr(tolerance, "problem_from_spec", counted)
+    monkeypatch.setattr(cli, "_solve_at_levels", stop)
+    path = _spec(tmp_path, TOLERANCES)
+    assert main(["solve", path, "--fidelity", "reissner"]) == 1  # the internal error of `stop`
+    assert "stopped before the solve" in capsys.readouterr().err
+    assert built == [{"fidelity": "reissner"}]
 
 
 # --- the report names exactly the rows it breaks ---

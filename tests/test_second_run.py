@@ -5,6 +5,7 @@ from the kept executables (magdesign._export), and what it would learn from a tr
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -20,8 +21,9 @@ from magdesign._tracing import on_device, random_key, strongly_typed
 DEFAULT_SPEC = str(Path(__file__).resolve().parent.parent / "magdesign" / "design" / "default.toml")
 
 # Prints {"compiled": n, "traced": n} after running argv[1] in a new process: a command
-# (the rest of argv its arguments) or "spec" (the spec stage of the default design and
-# the host-side checks a command makes of it).
+# (the rest of argv its arguments), "spec" (the spec stage of the default design and
+# the host-side checks a command makes of it) or "scenes" (the scenes of the spec files
+# that follow, with their checks).
 _COUNTED = textwrap.dedent(
     """
     import contextlib, io, json, sys
@@ -38,6 +40,14 @@ _COUNTED = textwrap.dedent(
         with_parameters(scene, {v.name: float(v.start) for v in problem.variables})
         random_key(0)
         float(bound(1.0, 1.01, True))
+    elif sys.argv[1] == "scenes":  # the scenes of the specs argv[2:] and the checks of their loads
+        import warnings
+        from magdesign.spec.design import load_spec
+        from magdesign.spec.scene import scene_from_spec
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the examples' own plausibility warnings
+            for path in sys.argv[2:]:
+                scene_from_spec(load_spec(path))
     else:
         from magdesign import cli
         with contextlib.redirect_stdout(io.StringIO()):
@@ -49,7 +59,7 @@ _COUNTED = textwrap.dedent(
 
 
 def _counted(*arguments, cache=None):
-    environment = {**os.environ, "MAGDESIGN_NO_EXPORT": ""}
+    environment = {**os.environ, "MAGDESIGN_NO_EXPORT": "", "MAGDESIGN_NO_RECOMPILE": ""}  # as a user's command
     if cache is not None:
         environment["MAGDESIGN_CACHE_DIR"] = str(cache)
     done = subprocess.run(
@@ -62,21 +72,44 @@ def test_the_spec_stage_compiles_and_traces_nothing_in_a_new_process():
     assert _counted("spec") == {"compiled": 0, "traced": 0}
 
 
+def test_a_skins_spec_stage_compiles_and_traces_nothing_in_a_new_process(tmp_path):
+    """A skin's checks (its contact patch and strain, the outputs' map, the chips) compute
+    with numpy, and its arrays are made without programs; a neo_hookean layer's too (its
+    press is solved when the scene runs, not when it is built)."""
+    examples = Path(__file__).resolve().parent.parent / "examples"
+    skins = [str(examples / f"{name}.toml") for name in ("skin", "skin_pattern", "eflesh")]
+    text = (examples / "skin.toml").read_text()
+    neo_hookean = text.replace("poisson_ratio = 0.49", 'material = "neo_hookean"\nbulk_modulus = "10 MPa"')
+    neo_hookean = neo_hookean.replace("direction = [0, 0, 1]", 'direction = [0, 0, 1]\nfield = "cells"')
+    assert neo_hookean.count("neo_hookean") == 1 and neo_hookean.count('"cells"') == 1
+    (tmp_path / "neo_hookean.toml").write_text(neo_hookean)
+    skins.append(str(tmp_path / "neo_hookean.toml"))
+    assert _counted("scenes", *skins) == {"compiled": 0, "traced": 0}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "command",
+    "command, upgrade",
     [
-        ["sweep", DEFAULT_SPEC, "--over", "compliance=0.3mm/N:0.34mm/N:3", "--fidelity", "reissner"],
-        ["simulate", DEFAULT_SPEC],
-        ["solve", "--fidelity", "reissner"],
+        (["sweep", DEFAULT_SPEC, "--over", "compliance=0.3mm/N:0.34mm/N:3", "--fidelity", "reissner"], False),
+        (["simulate", DEFAULT_SPEC], False),
+        (["solve", "--fidelity", "reissner"], True),
     ],
     ids=["sweep", "simulate", "solve"],
 )
-def test_a_second_run_of_a_command_compiles_and_traces_nothing(tmp_path, command):
+def test_a_second_run_of_a_command_compiles_and_traces_nothing(tmp_path, command, upgrade):
     arguments = [*command, "--json", "--quiet"]
     first = _counted(*arguments, cache=tmp_path)
     assert first["compiled"] > 0  # a fresh cache: the first run compiles the programs it keeps
     assert _counted(*arguments, cache=tmp_path) == {"compiled": 0, "traced": 0}
+    if upgrade:
+        # An upgrade of magdesign makes every entry of ours a miss (new versions()), while
+        # JAX's compilation cache holds the same programs: the run after it reads them from
+        # there and compiles them once more to keep them (magdesign._export._Program._keep),
+        # and the run after that compiles and traces nothing again.
+        shutil.rmtree(tmp_path / "exported")
+        assert _counted(*arguments, cache=tmp_path)["compiled"] > 0
+        assert _counted(*arguments, cache=tmp_path) == {"compiled": 0, "traced": 0}
 
 
 def test_random_key_is_jax_random_key():

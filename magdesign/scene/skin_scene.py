@@ -89,12 +89,17 @@ largest normal force and its shear, with the chips' noise (``noise``, T per axis
                            sqrt(var x + var y) (m), worst and median over the map
     force_resolution_normal / force_resolution_shear   the bound's deviation of Fn and of
                            the shear magnitude's worst axis (N), worst over the map
+    force_resolution_shear_x / force_resolution_shear_y   the bound's deviation of F_x and
+                           of F_y (N), each worst over the map (force_resolution_shear is
+                           the larger of the two)
     crosstalk              the largest |correlation| between a normal and a shear force
                            estimate over the map (-)
-    background_force_error the normal-force error (N) that a uniform field of
-                           BACKGROUND_REFERENCE (the Earth's, 50 uT) along the worst axis
-                           causes, through the least-squares fit of all readings, worst over
-                           the map
+    background_force_error the normal-force error (N) that a uniform field along the worst
+                           axis causes, through the least-squares fit of all readings, worst
+                           over the map; the field's size is the listed background effect's
+                           |B| (the field the spec states the chips sit in), else
+                           BACKGROUND_REFERENCE (the Earth's, 50 uT)
+                           (:meth:`SkinScene.background_reference`)
     saturation_ratio       the largest |reading| over every chip, axis and load point of the
                            sweep over the chips' range (-)
     saturation_force       the largest normal force (N) that presses no chip axis out of its
@@ -133,6 +138,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from magdesign._numerics import safe_div, safe_norm
+from magdesign._tracing import on_device
 from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
 from magdesign.fields.layer_field import finer, gauss_levels, layer_field, pattern
@@ -147,7 +153,7 @@ from magdesign.mechanics.skin_layer import (
     spectral_grid,
 )
 from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
-from magdesign.scene.effects import AbstractEffect, judged_saturation
+from magdesign.scene.effects import AbstractEffect, Background, judged_saturation
 from magdesign.scene.loads import Loads
 from magdesign.scene.pose import SoftPart, soft_parameter_paths, soft_parts_field
 from magdesign.transducers import Hall3D, cramer_rao
@@ -162,7 +168,8 @@ SATURATION_FORCE_CAP = 1e3
 # or after SATURATION_STEPS (module docstring).
 SATURATION_RTOL = 1e-6
 SATURATION_STEPS = 8
-# A uniform field of the Earth's size (T), the reference of background_force_error.
+# A uniform field of the Earth's size (T), the reference of background_force_error where the
+# scene lists no background.
 BACKGROUND_REFERENCE = 50 * uT
 # The unknowns of a load point and their units, the order of the Jacobian's columns.
 LOAD_UNKNOWNS = ("x", "y", "normal", "shear_x", "shear_y")
@@ -224,11 +231,14 @@ def _held(tree):
 
 
 def _chip_pairs(chips) -> tuple[tuple[Float[Array, ""], Float[Array, ""]], ...]:
-    """Chips' positions (S, 2) as S pairs of scalars (x, y): leaves a design sets one by one."""
-    rows = jnp.asarray(chips, dtype=float)
+    """Chips' positions (S, 2) as S pairs of scalars (x, y): leaves a design sets one by one.
+    Concrete positions are split in numpy and put on the device one by one (no program to
+    compile, :func:`~magdesign._tracing.on_device`); traced ones by indexing."""
+    concrete = _concrete(chips)
+    rows = jnp.asarray(chips, dtype=float) if concrete is None else np.asarray(concrete, dtype=float)
     if rows.ndim != 2 or rows.shape[-1] != 2:
         raise ValueError(f"chips must be the chips' (x, y), shape (S, 2), got shape {rows.shape}")
-    return tuple((row[0], row[1]) for row in rows)
+    return tuple((on_device(row[0]), on_device(row[1])) for row in rows)
 
 
 class SkinMagnets(eqx.Module):
@@ -324,6 +334,8 @@ class SkinScene(AbstractScene):
         "localisation_median": "m",
         "force_resolution_normal": "N",
         "force_resolution_shear": "N",
+        "force_resolution_shear_x": "N",
+        "force_resolution_shear_y": "N",
         "crosstalk": "1",
         "background_force_error": "N",
         "saturation_ratio": "1",
@@ -353,10 +365,12 @@ class SkinScene(AbstractScene):
         """The listed saturation effect, else the Hall chips' own range per axis."""
         return judged_saturation(self.effects, self.hall.full_scale)
 
-    def chip_positions(self) -> Float[Array, "s 2"]:
-        """The chips' (x, y) (m), (S, 2): ``chips``, times ``pitch`` where one is given."""
-        positions = jnp.stack([jnp.stack(chip) for chip in self.chips])
-        return positions if self.pitch is None else positions * self.pitch
+    def chip_positions(self, *, xp=jnp) -> Float[Array, "s 2"]:
+        """The chips' (x, y) (m), (S, 2): ``chips``, times ``pitch`` where one is given.
+        ``xp``: the array module, ``jax.numpy`` (traceable) or ``numpy`` (a concrete scene's
+        numbers without a JAX program: the spec's checks)."""
+        positions = xp.stack([xp.stack(chip) for chip in self.chips])
+        return positions if self.pitch is None else positions * xp.asarray(self.pitch)
 
     def sensor_poses(self):
         chips = self.chip_positions()
@@ -421,17 +435,19 @@ class SkinScene(AbstractScene):
         )
         return jnp.where(converged, u, jnp.nan), jnp.where(converged, rotation, jnp.nan)
 
-    def contact_radius(self, normal_force: Float[Array, ""]) -> Float[Array, ""]:
-        """The contact patch's radius a (m) under ``normal_force`` (N): the sphere's Hertz
-        radius, floored, or the flat punch's own (module docstring)."""
+    def contact_radius(self, normal_force: Float[Array, "..."], *, xp=jnp) -> Float[Array, "..."]:
+        """The contact patch's radius a (m) under ``normal_force`` (N, (...,)), shape
+        (...,): the sphere's Hertz radius, floored, or the flat punch's own (module
+        docstring). ``xp``: the array module (:meth:`chip_positions`)."""
+        radius = xp.asarray(self.sphere_radius)
         if self.indenter == "flat":
-            return jnp.broadcast_to(self.sphere_radius, jnp.shape(normal_force))
-        e_star = 2.0 * self.shear_modulus / (1.0 - self.poisson_ratio)
-        force = jnp.maximum(normal_force, CONTACT_FORCE_FLOOR)
-        return (3.0 * force * self.sphere_radius / (4.0 * e_star)) ** (1.0 / 3.0)
+            return xp.broadcast_to(radius, xp.shape(normal_force))
+        e_star = 2.0 * xp.asarray(self.shear_modulus) / (1.0 - xp.asarray(self.poisson_ratio))
+        force = xp.maximum(normal_force, CONTACT_FORCE_FLOOR)
+        return (3.0 * force * radius / (4.0 * e_star)) ** (1.0 / 3.0)
 
     def contact_strain(
-        self, normal_force: Float[Array, "..."], shear_force: Float[Array, "... 2"]
+        self, normal_force: Float[Array, "..."], shear_force: Float[Array, "... 2"], *, xp=jnp
     ) -> Float[Array, "..."]:
         """The strain under the contact (-), shape (...,): the displacement of the patch's
         centre, its depth delta and its tangential travel u_t, over the patch's radius a,
@@ -449,13 +465,15 @@ class SkinScene(AbstractScene):
 
         On a bonded layer the depth is smaller than the half-space's (by 7 % at a / h = 0.1,
         22 % at 0.3: :mod:`magdesign.mechanics.skin_layer`), so this overstates the strain
-        a little there."""
-        radius = self.contact_radius(normal_force)
-        g, nu = self.shear_modulus, self.poisson_ratio
+        a little there. ``xp``: the array module (:meth:`chip_positions`)."""
+        radius = self.contact_radius(normal_force, xp=xp)
+        g, nu = xp.asarray(self.shear_modulus), xp.asarray(self.poisson_ratio)
         shape = 1.5 if self.indenter == "sphere" else 1.0  # Hertz's centre over the flat punch's
-        tangential = (2.0 - nu) * jnp.asarray(shear_force, dtype=float)
-        normal = (2.0 * (1.0 - nu) * jnp.asarray(normal_force, dtype=float))[..., None]
-        travel = safe_norm(jnp.concatenate([normal, tangential], axis=-1))  # finite slope at rest too
+        tangential = (2.0 - nu) * xp.asarray(shear_force, dtype=float)
+        normal = (2.0 * (1.0 - nu) * xp.asarray(normal_force, dtype=float))[..., None]
+        travels = xp.concatenate([normal, tangential], axis=-1)
+        # traced: a finite slope at rest too; numpy's numbers need no derivative
+        travel = safe_norm(travels) if xp is jnp else np.linalg.norm(travels, axis=-1)
         return shape * travel / (8.0 * g * radius * radius)
 
     def surface_load(self, state: Float[Array, "5"]) -> SurfaceLoad:
@@ -536,22 +554,23 @@ class SkinScene(AbstractScene):
     def transduce(self, field):
         return field
 
-    def map_points(self) -> Float[Array, "m 2"]:
+    def map_points(self, *, xp=jnp) -> Float[Array, "m 2"]:
         """The outputs' contact positions (M, 2) (m): a ``map_grid`` over the ``map_size``
         area centred on the skin's centre (the origin), or where it is None over the chips'
-        bounding box, corners included; along an axis of one point, the area's middle."""
+        bounding box, corners included; along an axis of one point, the area's middle.
+        ``xp``: the array module (:meth:`chip_positions`)."""
         if self.map_size is None:
-            chips = self.chip_positions()
-            low, high = jnp.min(chips, axis=0), jnp.max(chips, axis=0)
+            chips = self.chip_positions(xp=xp)
+            low, high = xp.min(chips, axis=0), xp.max(chips, axis=0)
         else:
-            high = jnp.asarray(self.map_size) / 2
+            high = xp.asarray(self.map_size) / 2
             low = -high
         xs, ys = (
-            jnp.linspace(low[i], high[i], n) if n > 1 else ((low[i] + high[i]) / 2)[None]
+            xp.linspace(low[i], high[i], n) if n > 1 else ((low[i] + high[i]) / 2)[None]
             for i, n in enumerate(self.map_grid)
         )
-        xx, yy = jnp.meshgrid(xs, ys, indexing="ij")
-        return jnp.stack([xx.ravel(), yy.ravel()], axis=-1)
+        xx, yy = xp.meshgrid(xs, ys, indexing="ij")
+        return xp.stack([xx.ravel(), yy.ravel()], axis=-1)
 
     def readings_at(self, state: Float[Array, "5"]) -> Float[Array, "s 3"]:
         """Every chip's field (T, chip frame), (S, 3), under one load state (x, y, Fn, F_x,
@@ -559,15 +578,23 @@ class SkinScene(AbstractScene):
         field's effects) up to the readings' own effects, whose noise the bounds take."""
         return chain(self, state[None], without=STATIC_WITHOUT).chip_field[0]
 
+    def background_reference(self) -> Float[Array, ""]:
+        """The size (T) of the uniform field whose force error ``background_force_error``
+        states: |B| of the listed background effects' field (the field the chips sit in),
+        else BACKGROUND_REFERENCE (the Earth's, 50 uT). A stated zero field gives 0."""
+        stated = [effect.field_ for effect in self.effects if isinstance(effect, Background)]
+        return safe_norm(sum(stated)) if stated else jnp.asarray(BACKGROUND_REFERENCE)
+
     def resolution_at(self, state: Float[Array, "5"]):
         """(Cramer-Rao :class:`~magdesign.inverse.Bound` of the load state from all readings,
-        the normal-force error (N) of a BACKGROUND_REFERENCE field along x, y and z (3,))."""
+        the normal-force error (N) of a uniform field of :meth:`background_reference`'s size
+        along x, y and z (3,))."""
         jacobian = jax.jacfwd(lambda q: self.readings_at(q).ravel())(state)  # (3 S, 5)
         noise = jnp.tile(self.noise, len(self.chips))
         bound = cramer_rao(jacobian, noise)
         # the least-squares fit's response to a uniform field added to every chip
         weighted = jacobian / noise[:, None]
-        fields = jnp.tile(jnp.eye(3) * BACKGROUND_REFERENCE, (1, len(self.chips))) / noise  # (3, 3 S)
+        fields = jnp.tile(jnp.eye(3) * self.background_reference(), (1, len(self.chips))) / noise  # (3, 3 S)
         shift = jnp.einsum("ij,kj->ki", bound.covariance @ weighted.T, fields)
         return bound, shift[:, 2]
 
@@ -642,6 +669,8 @@ class SkinScene(AbstractScene):
             "localisation_median": jnp.median(localisation),
             "force_resolution_normal": jnp.max(bounds.deviation[:, 2]),
             "force_resolution_shear": jnp.max(bounds.deviation[:, 3:5]),
+            "force_resolution_shear_x": jnp.max(bounds.deviation[:, 3]),
+            "force_resolution_shear_y": jnp.max(bounds.deviation[:, 4]),
             "crosstalk": jnp.max(jnp.abs(correlation)),
             "background_force_error": jnp.max(jnp.abs(background)),
             "saturation_ratio": self.chip_range().ratio(self.transduce(result.chip_field)),

@@ -143,7 +143,7 @@ def fewest_chips(
         trial_spec["sensor"]["grid"] = list(grid)
         trial_spec.get("design", {}).pop("grids", None)  # a trial is a design at its grid (and --write writes it so)
         try:
-            problem, _ = problem_from_spec(trial_spec)
+            problem, scene = problem_from_spec(trial_spec)
         except SpecError as error:
             if not str(error).startswith("sensor.grid"):  # the spec's own error, whatever the grid
                 raise
@@ -153,7 +153,7 @@ def fewest_chips(
             # read by the tolerance command: refused here as there, before the first solve
             with warnings.catch_warnings():  # the spec's warnings are said by problem_from_spec
                 warnings.simplefilter("ignore")
-                tolerance_problem_from_spec(trial_spec)
+                tolerance_problem_from_spec(trial_spec, built=(problem, scene))
         result = solve(problem, **options)
         trials.append(GridTrial(grid, grid[0] * grid[1], str(result.status), result=result))
         if trials[-1].status == "successful":

@@ -8,6 +8,7 @@ import warnings
 import jax.numpy as jnp
 import numpy as np
 
+from magdesign._tracing import on_device
 from magdesign.fields.layer_field import finer
 from magdesign.scene.pose import grid_positions
 from magdesign.scene.skin_scene import (
@@ -89,7 +90,7 @@ def check_skin_loads(scene, loads):
         )
     thickness = float(scene.thickness)
     map_key = "sensor.map_grid" if scene.map_size is None else "sensor.map_size"
-    for key, points in (("load.contact", loads.contact), (map_key, scene.map_points())):
+    for key, points in (("load.contact", loads.contact), (map_key, scene.map_points(xp=np))):
         margin = float(np.min(size / 2 - np.abs(np.asarray(points))))
         if margin < thickness:
             warnings.warn(
@@ -107,7 +108,7 @@ def check_contact_patch(scene, force):
     """Warn (:class:`~magdesign.spec.checks.PlausibilityWarning`) where the skin's contact
     radius under ``force`` (N) exceeds SKIN_CONTACT_RATIO times its thickness: the sphere's
     Hertz radius (naming load.normal), or the flat punch's own (naming indenter.radius)."""
-    radius, thickness = float(scene.contact_radius(force)), float(scene.thickness)
+    radius, thickness = float(scene.contact_radius(force, xp=np)), float(scene.thickness)
     if radius <= SKIN_CONTACT_RATIO * thickness:
         return
     reach = f"the half-space contact patch holds to about {SKIN_CONTACT_RATIO:g}"
@@ -146,7 +147,7 @@ def check_contact_strain(scene, loads):
     if scene.material == "neo_hookean":
         check_shear_strain(scene, normals, shears)
         return
-    travels = np.asarray(scene.contact_strain(normals, shears))
+    travels = scene.contact_strain(normals, shears, xp=np)
     nu = float(scene.poisson_ratio)
     # which travel dominates: the depth's 2 (1 - nu) Fn or the shear's (2 - nu) |F_t|
     sheared = (2.0 - nu) * np.hypot(shears[..., 0], shears[..., 1]) > 2.0 * (1.0 - nu) * normals
@@ -159,7 +160,7 @@ def check_contact_strain(scene, loads):
     strain = float(travels[worst])
     normal, shear, sheared = float(normals[worst]), shears[worst], bool(sheared[worst])
     key = ("load.shear_x" if abs(shear[0]) >= abs(shear[1]) else "load.shear_y") if sheared else "load.normal"
-    radius = float(scene.contact_radius(normal))
+    radius = float(scene.contact_radius(normal, xp=np))
     travel = f"the {'flat punch' if scene.indenter == 'flat' else 'sphere'}'s travel over its {radius * 1e3:.3g} mm "
     travel += "radius" if scene.indenter == "flat" else "Hertz contact radius"
     if scene.indenter != "flat" and not sheared:
@@ -187,7 +188,7 @@ def check_shear_strain(scene, normals, shears):
     contact (:meth:`~magdesign.scene.skin_scene.SkinScene.contact_strain` of the shear
     alone, on the press's patch) exceeds SKIN_STRAIN_LIMIT at a press of CONTACT_FORCE_FLOOR or more."""
     # contact_strain's tangential part alone, on the press's patch: 3 (2 - nu) |F_t| / (16 G a^2)
-    radii, nu = np.asarray(scene.contact_radius(normals)), float(scene.poisson_ratio)
+    radii, nu = scene.contact_radius(normals, xp=np), float(scene.poisson_ratio)
     travel = 3.0 * (2.0 - nu) * np.hypot(shears[..., 0], shears[..., 1]) / (16.0 * float(scene.shear_modulus))
     strains = np.where(normals >= CONTACT_FORCE_FLOOR, travel / radii**2, 0.0)
     worst = int(np.argmax(strains))
@@ -440,20 +441,21 @@ def skin_scene(spec, fidelity):
     effects = _hall_effects(spec, hall)
     # the outputs' noise: the listed noise effect's, else one LSB per axis (scene.noise's default)
     noise = next((effect.sigma for effect in effects if effect.name == "noise"), hall.lsb)
+    # the scene's leaves put on the device without a program (on_device): a spec's build runs no JAX
     return SkinScene(
-        thickness=jnp.asarray(thickness),
-        size=jnp.asarray(size),
-        polarization=jnp.asarray(polarization),
-        shear_modulus=jnp.asarray(shear_modulus),
-        poisson_ratio=jnp.asarray(poisson_ratio),
-        sphere_radius=jnp.asarray(radius),
-        chips=jnp.asarray(offsets),
-        pitch=None if pitch is None else jnp.asarray(pitch),
-        depth=jnp.asarray(depth),
-        noise=jnp.broadcast_to(jnp.asarray(noise, dtype=float), (3,)),
+        thickness=on_device(thickness),
+        size=on_device(size),
+        polarization=on_device(polarization),
+        shear_modulus=on_device(shear_modulus),
+        poisson_ratio=on_device(poisson_ratio),
+        sphere_radius=on_device(radius),
+        chips=offsets,  # numpy: split into the scene's pairs without a program
+        pitch=None if pitch is None else on_device(pitch),
+        depth=on_device(depth),
+        noise=on_device(np.broadcast_to(np.asarray(noise, dtype=float), (3,))),
         hall=hall,
         effects=effects,
-        direction=(0.0, 0.0, 1.0) if direction is None else tuple(float(v) for v in direction),
+        direction=(0.0, 0.0, 1.0) if direction is None else tuple(float(v) for v in np.asarray(direction)),
         cells=cells,
         map_grid=map_grid,
         map_size=None if map_size is None else tuple(map_size),
@@ -462,7 +464,7 @@ def skin_scene(spec, fidelity):
         resolution=resolution,
         indenter=indenter_shape,
         soft=soft,
-        period=None if period is None else jnp.asarray(period),
+        period=None if period is None else on_device(period),
         material=material,
-        bulk_modulus=None if bulk_modulus is None else jnp.asarray(bulk_modulus),
+        bulk_modulus=None if bulk_modulus is None else on_device(bulk_modulus),
     )

@@ -202,14 +202,24 @@ def _with_effect(scene, name, spec):
     return eqx.tree_at(lambda s: s.effects, scene, fx.in_order([*scene.effects, effect]))
 
 
-def tolerance_problem_from_spec(spec: dict, *, fidelity: str | None = None) -> ToleranceProblem:
+def tolerance_problem_from_spec(
+    spec: dict, *, fidelity: str | None = None, built: tuple[Problem, AbstractScene] | None = None
+) -> ToleranceProblem:
     """Read a design spec with a [design.tolerances] table (see the module docstring).
+
+    Args:
+        spec: the parsed TOML (scene tables, [design] with its tolerances).
+        fidelity: overrides the scene's mechanics fidelity, as for
+            :func:`~magdesign.spec.design.problem_from_spec`.
+        built: the (problem, scene) that :func:`~magdesign.spec.design.problem_from_spec`
+            already built from ``spec`` (at ``fidelity``), reused rather than built again (the
+            spec stage costs seconds for a skin); None builds it here.
 
     Raises:
         SpecError: one line naming the key: a tolerance on an input the scene does not
             have, a unit that does not fit, a negative size, an unknown distribution.
     """
-    problem, scene = problem_from_spec(spec, fidelity=fidelity)
+    problem, scene = problem_from_spec(spec, fidelity=fidelity) if built is None else built
     table = dict(sub_table(sub_table(spec, "design"), "tolerances", where="design.tolerances"))
     default = table.pop("distribution", "normal")
     if default not in DISTRIBUTIONS:

@@ -135,5 +135,5 @@ def mlx90393(gain_sel: int = 7, resolution: int = 0) -> Hall3D:
     if resolution not in (0, 1):
         raise ValueError(f"resolution must be 0 or 1 (signed 16-bit output), got {resolution!r}")
     lsb_xy, lsb_z = (2**resolution * value * uT for value in _MLX90393_LSB_UT[gain_sel])
-    lsb = jnp.array([lsb_xy, lsb_xy, lsb_z])
-    return Hall3D(lsb=lsb, full_scale=_SIGNED_16_BIT_MAX * lsb)
+    lsb = np.array([lsb_xy, lsb_xy, lsb_z])  # numpy, then on the device: no program to compile
+    return Hall3D(lsb=on_device(lsb), full_scale=on_device(_SIGNED_16_BIT_MAX * lsb))

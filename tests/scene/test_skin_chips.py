@@ -4,16 +4,19 @@ whose solve succeeds, with each candidate's status."""
 import copy
 import json
 import tomllib
+from types import SimpleNamespace
 
 import equinox as eqx
 import jax.numpy as jnp
 import pytest
 from scene_helpers import example
 
+import magdesign.spec.chips as chips
+import magdesign.spec.tolerance as tolerance
 from magdesign.cli import main
 from magdesign.scene import loads_from_spec, outputs, scene_from_spec, with_parameters
 from magdesign.spec import SpecError, fewest_chips
-from magdesign.spec.design import spec_text
+from magdesign.spec.design import problem_from_spec, spec_text
 from magdesign.units import mT
 
 # the outputs of a scene over its loads, one compiled program per grid (the grid's chips
@@ -154,3 +157,27 @@ def test_candidate_grids_refuse_a_tolerance_that_the_tolerance_command_refuses()
     }
     with pytest.raises(SpecError, match=r"design\.tolerances\.mechanics\.c10"):
         fewest_chips(spec, [[1, 1], [2, 2]])
+
+
+def test_candidate_grids_build_each_grid_once(monkeypatch):
+    """A grid's [design.tolerances] is read on the problem its trial built: the spec stage
+    (seconds for a skin) runs once per grid, not twice."""
+    spec = grid_skin()
+    spec["design"] = {
+        "variables": {"sensor.pitch": {"start": "8 mm", "lower": "4 mm", "upper": "12 mm"}},
+        "targets": {"force_resolution_normal": {"value": "1 mN"}},
+        "tolerances": {"magnet.polarization": "5 %"},
+    }
+    built = []
+
+    def counted(trial_spec, **options):
+        built.append(tuple(trial_spec["sensor"]["grid"]))
+        return problem_from_spec(trial_spec, **options)
+
+    monkeypatch.setattr(chips, "problem_from_spec", counted)
+    monkeypatch.setattr(tolerance, "problem_from_spec", counted)
+    # no solve: the count is of the spec stage alone
+    monkeypatch.setattr(chips, "solve", lambda problem, **options: SimpleNamespace(status="successful"))
+    found = fewest_chips(spec, [[2, 2]])
+    assert found.status == "successful"
+    assert built == [(2, 2)]

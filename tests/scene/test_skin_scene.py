@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from magdesign.scene.core import outputs, simulate
-from magdesign.scene.effects import Placement
+from magdesign.scene.effects import Background, Placement
 from magdesign.scene.loads import Loads
 from magdesign.scene.skin_scene import BACKGROUND_REFERENCE, SkinScene
 from magdesign.transducers import mlx90393
@@ -62,13 +62,14 @@ def test_a_centred_press_is_symmetric(pressed):
 
 @pytest.mark.slow  # compiles the Jacobian of every reading through the layer's transforms
 def test_resolution_outputs_against_differences_and_numpys_fisher_inverse():
-    scene = skin(cells=(4, 4, 1))
+    # the cross stretched along x (arms of 8 mm along x, 4 mm along y): the shear axes' bounds differ
+    scene = skin(cells=(4, 4, 1), chips=jnp.asarray(CHIPS * np.array([4 / 3, 2 / 3])))
     loads = Loads(jnp.array([0.0, 2.0]), shear=jnp.array([[0.0, 0.0], [0.3, 0.0]]))
     got = outputs(scene, loads)
     readings = jax.jit(lambda q: scene.readings_at(q).ravel())
     steps = np.array([1e-6, 1e-6, 1e-4, 1e-4, 1e-4])
     noise = np.full(15, 1 * uT)
-    localisation, normal, shear, background = [], [], [], []
+    localisation, normal, shear_x, shear_y, background = [], [], [], [], []
     for x, y in np.asarray(scene.map_points()):
         state = np.array([x, y, 2.0, 0.3, 0.0])
         columns = []
@@ -80,13 +81,17 @@ def test_resolution_outputs_against_differences_and_numpys_fisher_inverse():
         covariance = np.linalg.inv(weighted.T @ weighted)
         localisation.append(np.sqrt(covariance[0, 0] + covariance[1, 1]))
         normal.append(np.sqrt(covariance[2, 2]))
-        shear.append(np.sqrt(max(covariance[3, 3], covariance[4, 4])))
+        shear_x.append(np.sqrt(covariance[3, 3]))
+        shear_y.append(np.sqrt(covariance[4, 4]))
         uniform = np.tile(np.eye(3) * BACKGROUND_REFERENCE, (1, 5)) / noise
         background.append(np.max(np.abs((covariance @ weighted.T @ uniform.T)[2])))
     np.testing.assert_allclose(got["localisation_worst"], max(localisation), rtol=1e-4)
     np.testing.assert_allclose(got["localisation_median"], np.median(localisation), rtol=1e-4)
     np.testing.assert_allclose(got["force_resolution_normal"], max(normal), rtol=1e-4)
-    np.testing.assert_allclose(got["force_resolution_shear"], max(shear), rtol=1e-4)
+    np.testing.assert_allclose(got["force_resolution_shear_x"], max(shear_x), rtol=1e-4)
+    np.testing.assert_allclose(got["force_resolution_shear_y"], max(shear_y), rtol=1e-4)
+    assert abs(max(shear_x) / max(shear_y) - 1) > 0.05  # the layout tells the axes apart
+    assert got["force_resolution_shear"] == max(got["force_resolution_shear_x"], got["force_resolution_shear_y"])
     np.testing.assert_allclose(got["background_force_error"], max(background), rtol=1e-4)
     assert 0.0 <= float(got["crosstalk"]) <= 1.0 and 0.0 < float(got["saturation_ratio"]) < 1.0
 
@@ -112,6 +117,33 @@ def test_the_bounds_read_the_placed_chips():
     nominal = skin(cells=(4, 4, 2))
     np.testing.assert_allclose(placed.readings_at(state), shallower.readings_at(state), rtol=1e-12, atol=1e-15)
     assert np.max(np.abs(placed.readings_at(state) - nominal.readings_at(state))) > 1e-6
+
+
+def test_the_background_error_is_stated_for_the_listed_background(monkeypatch):
+    """background_force_error's uniform field has the listed background's size, else the
+    Earth's 50 uT. The chips' readings are replaced by a fixed linear map of the load state
+    (a known Jacobian, so no layer to compile); the error is numpy's least-squares response
+    to that field along z, and scales with the field's size (the fit is linear in it)."""
+    jacobian = np.random.default_rng(0).normal(size=(15, 5)) * np.array([1e-3, 1e-3, 1e-4, 1e-4, 1e-4])
+    monkeypatch.setattr(SkinScene, "readings_at", lambda self, state: (jnp.asarray(jacobian) @ state).reshape(5, 3))
+    noise = np.full(15, 1 * uT)
+    weighted = jacobian / noise[:, None]
+    response = np.linalg.inv(weighted.T @ weighted) @ weighted.T @ (np.tile(np.eye(3), (1, 5)) / noise).T
+    state = jnp.array([1 * mm, 0.5 * mm, 0.05, 0.01, 0.0])
+    stated = {
+        "none": ((), BACKGROUND_REFERENCE),
+        "earth": ((Background(field_=jnp.array([50 * uT, 0.0, 0.0])),), 50 * uT),
+        "strong": ((Background(field_=jnp.array([300 * uT, 0.0, -400 * uT])),), 500 * uT),
+    }
+    errors = {}
+    for name, (effects, size) in stated.items():
+        scene = skin(effects=effects)
+        assert float(scene.background_reference()) == pytest.approx(size, rel=1e-12)
+        _, errors[name] = scene.resolution_at(state)
+        np.testing.assert_allclose(errors[name], size * response[2], rtol=1e-9)
+    # the error is linear in the field's size: 500 uT against 50 uT, ten times
+    np.testing.assert_allclose(errors["strong"], 10.0 * errors["earth"], rtol=1e-9)
+    np.testing.assert_allclose(errors["earth"], errors["none"], rtol=1e-12)
 
 
 @pytest.mark.slow  # compiles the linear field at three resolutions

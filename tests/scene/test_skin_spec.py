@@ -388,3 +388,21 @@ def test_iron_near_a_skin_is_magnetised_by_its_field():
         scene_from_spec(skin(lambda s: (with_iron(s), s["soft"][0].update(moves=True))))
     with pytest.raises(SpecError, match=r"^soft\[0\]: it overlaps the skin's layer"):
         scene_from_spec(skin(lambda s: (with_iron(s), s["soft"][0].update(position=["3 mm", "2 mm", "1 mm"]))))
+
+
+@pytest.mark.parametrize("indenter", ["sphere", "flat"])
+def test_the_checks_numpy_numbers_are_the_scenes_jax_numbers(indenter):
+    """The spec's checks read the contact patch, its strain and the outputs' map in numpy
+    (no JAX program at load); the traceable jax.numpy forms give the same numbers."""
+    scene = scene_from_spec(skin(lambda s: s["indenter"].update(shape=indenter)))
+    normal = np.array([0.0, 5e-4, 0.05, 0.2, 3.0])
+    shear = np.array([[0.0, 0.0], [1e-4, 0.0], [0.01, -0.02], [0.05, 0.0], [0.0, 1.0]])
+    pairs = [
+        (scene.contact_radius(normal, xp=np), scene.contact_radius(jnp.asarray(normal))),
+        (scene.contact_strain(normal, shear, xp=np), scene.contact_strain(jnp.asarray(normal), jnp.asarray(shear))),
+        (scene.map_points(xp=np), scene.map_points()),
+        (scene.chip_positions(xp=np), scene.chip_positions()),
+    ]
+    for numbers, traceable in pairs:
+        assert isinstance(numbers, np.ndarray)
+        np.testing.assert_allclose(numbers, np.asarray(traceable), rtol=1e-14, atol=0.0)
