@@ -35,7 +35,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jax import lax
-from jaxtyping import Array, ArrayLike, Float
+from jaxtyping import Array, ArrayLike, Bool, Float
 
 from magdesign._numerics import safe_div
 from magdesign._validation import check_positive
@@ -169,6 +169,30 @@ def press_displacement(press: LayerPress, points: Float[ArrayLike, "... 2"]) -> 
     nodal = press.displacements[rows[..., :, None], cols[..., None, :]]  # (..., 3, 3, 2)
     u = jnp.einsum("...a,...b,...abk->...k", _quadratic(xi), _quadratic(eta), nodal)
     return jnp.where((r <= r_corners[-1])[..., None], u, 0.0)
+
+
+def press_converged(
+    normal_force: Float[ArrayLike, "..."],
+    *,
+    sphere_radius: Float[ArrayLike, ""],
+    thickness: Float[ArrayLike, ""],
+    material: AbstractHyperelastic,
+    force_floor: float,
+    mesh: tuple = DEFAULT_LAYER_MESH,
+) -> Bool[Array, "..."]:
+    """Whether the finite-strain layer's Newton solves converged under each ``normal_force``
+    Fn (N, (...,)), shape (...,): the solve :func:`press_field` makes at max(Fn,
+    ``force_floor``) (N). Traceable at any Fn >= 0 (no check of its inputs); the solve
+    depends on the force alone, not on where the sphere presses."""
+    force = jnp.asarray(normal_force, dtype=float)
+    args = jax.tree.map(lambda x: jnp.asarray(x, dtype=float), (sphere_radius, thickness, material))
+
+    def one(applied):
+        _, result = _press(*args, applied, tuple(mesh))
+        return result == PressResult.successful
+
+    flat = jnp.maximum(force, force_floor).reshape(-1)
+    return jax.vmap(one)(flat).reshape(force.shape)
 
 
 def press_field(

@@ -105,6 +105,10 @@ largest normal force and its shear, with the chips' noise (``noise``, T per axis
     saturation_force       the largest normal force (N) that presses no chip axis out of its
                            range, worst (smallest) over the map and the sweep's contacts
                            (below)
+    mechanics_converged    1 if the mechanics carries every load point of the sweep, else 0
+                           (-): always the linear layer; the neo_hookean layer where its
+                           press's Newton solve converged at each Fn (the outputs' map
+                           presses at the sweep's largest Fn, so it covers them too)
 
 ``saturation_force`` presses along the sweep's largest load: a normal force F with the shear
 F (F_x, F_y) / Fn of the sweep's point of largest Fn, at each contact position of the map and
@@ -142,7 +146,7 @@ from magdesign._tracing import on_device
 from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
 from magdesign.fields.layer_field import finer, gauss_levels, layer_field, pattern
-from magdesign.mechanics.finite_layer import press_field
+from magdesign.mechanics.finite_layer import press_converged, press_field
 from magdesign.mechanics.materials import NeoHookean
 from magdesign.mechanics.skin_layer import (
     ElasticLayer,
@@ -152,7 +156,7 @@ from magdesign.mechanics.skin_layer import (
     layer_displacement_grid,
     spectral_grid,
 )
-from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
+from magdesign.scene.core import MECHANICS_CONVERGED, STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect, Background, judged_saturation
 from magdesign.scene.loads import Loads
 from magdesign.scene.pose import SoftPart, soft_parameter_paths, soft_parts_field
@@ -340,6 +344,7 @@ class SkinScene(AbstractScene):
         "background_force_error": "N",
         "saturation_ratio": "1",
         "saturation_force": "N",
+        MECHANICS_CONVERGED: "1",
     }
 
     @property
@@ -378,8 +383,20 @@ class SkinScene(AbstractScene):
         return positions, jnp.broadcast_to(jnp.eye(3), (positions.shape[0], 3, 3))
 
     def displacement(self, loads: Loads):
+        """The load states (x, y, Fn, F_x, F_y) (m, m, N, N, N), (n, 5), and whether the
+        mechanics carries each (n,): always the linear layer; the neo_hookean layer where
+        the Newton solve of its press at that Fn converged (the field is NaN where not)."""
         state = jnp.concatenate([loads.contact, loads.normal[:, None], loads.shear], axis=-1)
-        return state, jnp.ones(state.shape[0], dtype=bool)
+        if self.material == "linear":
+            return state, jnp.ones(state.shape[0], dtype=bool)
+        converged = press_converged(
+            loads.normal,
+            sphere_radius=self.sphere_radius,
+            thickness=self.thickness,
+            material=NeoHookean(mu=self.shear_modulus, bulk=self.bulk_modulus),
+            force_floor=CONTACT_FORCE_FLOOR,
+        )
+        return state, converged
 
     def layer(self) -> ElasticLayer:
         return ElasticLayer(
@@ -675,4 +692,5 @@ class SkinScene(AbstractScene):
             "background_force_error": jnp.max(jnp.abs(background)),
             "saturation_ratio": self.chip_range().ratio(self.transduce(result.chip_field)),
             "saturation_force": self.saturation_force(result.loads),
+            MECHANICS_CONVERGED: jnp.all(result.converged).astype(float),
         }

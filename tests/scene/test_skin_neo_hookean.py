@@ -8,13 +8,15 @@ finite-strain layer's own departure, measured in tests/mechanics/test_finite_lay
 
 import warnings
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from scene_helpers import example
 
-from magdesign.scene import scene_from_spec
+from magdesign.scene import MECHANICS_CONVERGED, loads_from_spec, scene_from_spec, simulate
+from magdesign.scene.core import simulation_table
 from magdesign.scene.skin_scene import SkinScene
 from magdesign.spec.checks import PlausibilityWarning
 from magdesign.transducers import mlx90393
@@ -120,3 +122,27 @@ def test_a_neo_hookean_skin_reads_as_the_linear_one_at_small_strain_and_deeper_a
     assert np.max(np.abs(small_neo - small_linear)) < 0.05 * np.max(np.abs(small_linear))
     large_linear, large_neo = results[0.2]
     assert abs(large_neo[0, 2]) > 1.1 * abs(large_linear[0, 2])
+
+
+@pytest.mark.slow
+def test_a_press_the_neo_hookean_layer_cannot_carry_reaches_simulate_as_a_status():
+    """Expected before running: the finite-strain layer (K = 100 mu) carries the example's
+    0.2 N on a 2 mm sphere (a / R = 0.46) but its four load steps' Newton solves do not
+    converge at 10 N (measured: already at 1 N an out-of-balance force is left; at 10 N the
+    "depth" is metres, a layer squashed flat under a 2 mm sphere). That load
+    point's row is flagged not converged (its field is NaN, never a number that looks like
+    an equilibrium), the table names it with its force, and the outputs' mechanics_converged
+    is 0 (a design solve's "mechanics_not_converged")."""
+    spec = neo_hookean_spec()
+    spec["mechanics"]["bulk_modulus"] = "10 MPa"  # K = 100 mu
+    spec["load"].update(normal=["0.2 N", "10 N"], shear_x=["0 N", "0 N"], points=2)
+    scene = scene_from_spec(spec)
+    result = simulate(scene, loads_from_spec(spec))
+    np.testing.assert_array_equal(np.asarray(result.converged), [True, False])
+    readings = np.asarray(result.readings)
+    assert np.all(np.isfinite(readings[0])) and np.all(np.isnan(readings[1]))
+    table = simulation_table(result)
+    assert "did not converge at load points 2 (Fz 10 N)" in table
+    assert "1 (Fz" not in table
+    converged = eqx.filter_jit(lambda s, r: s.outputs(r)[MECHANICS_CONVERGED])(scene, result)
+    assert float(converged) == 0.0
