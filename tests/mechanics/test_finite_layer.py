@@ -8,8 +8,10 @@ Independent references:
 - the rim: the same layer meshed out to 10 h instead of 6 h;
 - the mesh: a mesh twice as fine in each direction (the error estimate LAYER_MESH_ERROR);
 - derivatives: central differences of the solved depth.
-The finite-strain departure at a skin's loads is a regression value (no published
-solution for a bonded neo-Hookean layer of finite thickness is used here).
+The finite-strain departure at a skin's loads is a regression value here (no published
+solution for a bonded neo-Hookean layer of finite thickness is used); a large press (depth /
+R = 0.2) is checked against an independent finite-element model in
+test_finite_layer_reference.py.
 """
 
 import jax
