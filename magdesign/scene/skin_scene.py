@@ -108,7 +108,9 @@ largest normal force and its shear, with the chips' noise (``noise``, T per axis
     mechanics_converged    1 if the mechanics carries every load point of the sweep, else 0
                            (-): always the linear layer; the neo_hookean layer where its
                            press's Newton solve converged at each Fn (the outputs' map
-                           presses at the sweep's largest Fn, so it covers them too)
+                           presses at the sweep's largest Fn, so it covers them too) and
+                           at saturation_force's (a NaN there, a press on its search that
+                           the layer did not carry, gives 0)
 
 ``saturation_force`` presses along the sweep's largest load: a normal force F with the shear
 F (F_x, F_y) / Fn of the sweep's point of largest Fn, at each contact position of the map and
@@ -389,14 +391,17 @@ class SkinScene(AbstractScene):
         state = jnp.concatenate([loads.contact, loads.normal[:, None], loads.shear], axis=-1)
         if self.material == "linear":
             return state, jnp.ones(state.shape[0], dtype=bool)
-        converged = press_converged(
-            loads.normal,
+        return state, self._press_converged(loads.normal)
+
+    def _press_converged(self, normal_force):
+        """Whether the finite-strain layer's press converged under each ``normal_force`` (N, (...,))."""
+        return press_converged(
+            normal_force,
             sphere_radius=self.sphere_radius,
             thickness=self.thickness,
             material=NeoHookean(mu=self.shear_modulus, bulk=self.bulk_modulus),
             force_floor=CONTACT_FORCE_FLOOR,
         )
-        return state, converged
 
     def layer(self) -> ElasticLayer:
         return ElasticLayer(
@@ -681,6 +686,13 @@ class SkinScene(AbstractScene):
         variance = jnp.diagonal(bounds.covariance, axis1=-2, axis2=-1)  # (M, 5)
         localisation = jnp.sqrt(variance[:, 0] + variance[:, 1])
         correlation = bounds.covariance[:, 2, 3:5] / jnp.sqrt(variance[:, 2:3] * variance[:, 3:5])
+        saturation = self.saturation_force(result.loads)
+        converged = jnp.all(result.converged)
+        if self.material != "linear":
+            # saturation_force's search presses harder than the sweep: a press the layer does not
+            # carry on its way leaves it NaN, which mechanics_converged then says
+            held = jax.lax.stop_gradient(saturation)
+            converged = converged & jnp.isfinite(held) & self._press_converged(held)
         return {
             "localisation_worst": jnp.max(localisation),
             "localisation_median": jnp.median(localisation),
@@ -691,6 +703,6 @@ class SkinScene(AbstractScene):
             "crosstalk": jnp.max(jnp.abs(correlation)),
             "background_force_error": jnp.max(jnp.abs(background)),
             "saturation_ratio": self.chip_range().ratio(self.transduce(result.chip_field)),
-            "saturation_force": self.saturation_force(result.loads),
-            MECHANICS_CONVERGED: jnp.all(result.converged).astype(float),
+            "saturation_force": saturation,
+            MECHANICS_CONVERGED: converged.astype(float),
         }

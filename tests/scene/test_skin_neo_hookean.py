@@ -132,7 +132,10 @@ def test_a_press_the_neo_hookean_layer_cannot_carry_reaches_simulate_as_a_status
     "depth" is metres, a layer squashed flat under a 2 mm sphere). That load
     point's row is flagged not converged (its field is NaN, never a number that looks like
     an equilibrium), the table names it with its force, and the outputs' mechanics_converged
-    is 0 (a design solve's "mechanics_not_converged")."""
+    is 0 (a design solve's "mechanics_not_converged"). A sweep the layer carries (0.1 N,
+    0.2 N) converges at each point, but saturation_force's search presses harder (the
+    chips 1 mm under a 2 mm skin of 100 kPa do not saturate below the layer's reach):
+    measured NaN, so mechanics_converged is 0 there too, not a silently missing output."""
     spec = neo_hookean_spec()
     spec["mechanics"]["bulk_modulus"] = "10 MPa"  # K = 100 mu
     spec["load"].update(normal=["0.2 N", "10 N"], shear_x=["0 N", "0 N"], points=2)
@@ -144,5 +147,14 @@ def test_a_press_the_neo_hookean_layer_cannot_carry_reaches_simulate_as_a_status
     table = simulation_table(result)
     assert "did not converge at load points 2 (Fz 10 N)" in table
     assert "1 (Fz" not in table
-    converged = eqx.filter_jit(lambda s, r: s.outputs(r)[MECHANICS_CONVERGED])(scene, result)
+    # one program for both sweeps (the same shapes): the converged flags and two outputs
+    run = eqx.filter_jit(
+        lambda s, loads: (lambda r: (r.converged, s.outputs(r)["saturation_force"], s.outputs(r)[MECHANICS_CONVERGED]))(
+            simulate(s, loads)
+        )
+    )
+    _, _, converged = run(scene, loads_from_spec(spec))
     assert float(converged) == 0.0
+    spec["load"].update(normal=["0.1 N", "0.2 N"])
+    carried, saturation, converged = run(scene, loads_from_spec(spec))
+    assert np.all(np.asarray(carried)) and np.isnan(float(saturation)) and float(converged) == 0.0
