@@ -72,11 +72,18 @@ def test_the_spec_stage_compiles_and_traces_nothing_in_a_new_process():
     assert _counted("spec") == {"compiled": 0, "traced": 0}
 
 
-def test_a_skins_spec_stage_compiles_and_traces_nothing_in_a_new_process():
+def test_a_skins_spec_stage_compiles_and_traces_nothing_in_a_new_process(tmp_path):
     """A skin's checks (its contact patch and strain, the outputs' map, the chips) compute
-    with numpy, and its arrays are made without programs."""
+    with numpy, and its arrays are made without programs; a neo_hookean layer's too (its
+    press is solved when the scene runs, not when it is built)."""
     examples = Path(__file__).resolve().parent.parent / "examples"
     skins = [str(examples / f"{name}.toml") for name in ("skin", "skin_pattern", "eflesh")]
+    text = (examples / "skin.toml").read_text()
+    neo_hookean = text.replace("poisson_ratio = 0.49", 'material = "neo_hookean"\nbulk_modulus = "10 MPa"')
+    neo_hookean = neo_hookean.replace("direction = [0, 0, 1]", 'direction = [0, 0, 1]\nfield = "cells"')
+    assert neo_hookean.count("neo_hookean") == 1 and neo_hookean.count('"cells"') == 1
+    (tmp_path / "neo_hookean.toml").write_text(neo_hookean)
+    skins.append(str(tmp_path / "neo_hookean.toml"))
     assert _counted("scenes", *skins) == {"compiled": 0, "traced": 0}
 
 

@@ -5,6 +5,9 @@ from magdesign.mechanics.dome import DomeCurve as DomeCurve
 from magdesign.mechanics.dome import DomeResult as DomeResult
 from magdesign.mechanics.dome import dome_compliance as dome_compliance
 from magdesign.mechanics.dome import dome_curve as dome_curve
+from magdesign.mechanics.finite_layer import LayerPress as LayerPress
+from magdesign.mechanics.finite_layer import press_displacement as press_displacement
+from magdesign.mechanics.finite_layer import press_layer as press_layer
 from magdesign.mechanics.layer import LayerStiffness as LayerStiffness
 from magdesign.mechanics.layer import compression_modulus as compression_modulus
 from magdesign.mechanics.layer import layer_stiffness as layer_stiffness

@@ -343,7 +343,7 @@ def simulation_table(result: SimulationResult) -> str:
         lines.append(f"{name}: {np.array2string(np.asarray(value), precision=6)}")
     failed = np.flatnonzero(~np.asarray(result.converged))
     if failed.size:
-        rows_failed = ", ".join(str(i + 1) for i in failed)
+        rows_failed = ", ".join(f"{i + 1} (Fz {float(loads.normal[i]):.6g} N)" for i in failed)
         lines.append(
             f"warning: the mechanics did not converge at load points {rows_failed}: those rows are not equilibria"
         )

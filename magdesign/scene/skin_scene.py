@@ -29,7 +29,14 @@ Fn / (2 pi R^2 sqrt(1 - r^2 / R^2)) and a shear traction of that shape (the same
 R / h as Hertz's patch).
 
 The layer's displacement field (linear elasticity: displacements small against h) moves its
-particles and turns them with the material's rotation curl(u) / 2. Two field models
+particles and turns them with the material's rotation curl(u) / 2. With ``material``
+"neo_hookean" (static; ``bulk_modulus`` K given, ``poisson_ratio`` the one derived from mu and
+K) the sphere's normal press moves them as the finite-strain layer computes it
+(:func:`magdesign.mechanics.finite_layer.press_field`: its displacement and rotation at the
+cells' centres or the magnets', NaN where its Newton solve did not converge), and the shear
+traction's part is the linear layer's, superposed (first order in the shear: docs/skins.md);
+only the sphere, and only the cells and the discrete magnets, which take point values (the
+linear field takes the linear layer's band-limited displacement). Two field models
 (``field``, static):
 
 - ``"linear"`` (the default): the field to first order in the displacement, the block's
@@ -98,6 +105,12 @@ largest normal force and its shear, with the chips' noise (``noise``, T per axis
     saturation_force       the largest normal force (N) that presses no chip axis out of its
                            range, worst (smallest) over the map and the sweep's contacts
                            (below)
+    mechanics_converged    1 if the mechanics carries every load point of the sweep, else 0
+                           (-): always the linear layer; the neo_hookean layer where its
+                           press's Newton solve converged at each Fn (the outputs' map
+                           presses at the sweep's largest Fn, so it covers them too) and
+                           at saturation_force's (a NaN there, a press on its search that
+                           the layer did not carry, gives 0)
 
 ``saturation_force`` presses along the sweep's largest load: a normal force F with the shear
 F (F_x, F_y) / Fn of the sweep's point of largest Fn, at each contact position of the map and
@@ -135,6 +148,8 @@ from magdesign._tracing import on_device
 from magdesign._validation import _concrete
 from magdesign.fields.cells import carried_cells, cells_field, layer_cells, moved_cells
 from magdesign.fields.layer_field import finer, gauss_levels, layer_field, pattern
+from magdesign.mechanics.finite_layer import press_converged, press_field
+from magdesign.mechanics.materials import NeoHookean
 from magdesign.mechanics.skin_layer import (
     ElasticLayer,
     SpectralGrid,
@@ -143,7 +158,7 @@ from magdesign.mechanics.skin_layer import (
     layer_displacement_grid,
     spectral_grid,
 )
-from magdesign.scene.core import STATIC_WITHOUT, AbstractScene, chain
+from magdesign.scene.core import MECHANICS_CONVERGED, STATIC_WITHOUT, AbstractScene, chain
 from magdesign.scene.effects import AbstractEffect, Background, judged_saturation
 from magdesign.scene.loads import Loads
 from magdesign.scene.pose import SoftPart, soft_parameter_paths, soft_parts_field
@@ -166,6 +181,8 @@ BACKGROUND_REFERENCE = 50 * uT
 LOAD_UNKNOWNS = ("x", "y", "normal", "shear_x", "shear_y")
 # The magnetised layer's field models (module docstring).
 FIELD_MODELS = ("linear", "cells")
+# The layer's materials (module docstring).
+LAYER_MATERIALS = ("linear", "neo_hookean")
 # What presses the skin, and the load profile of each (module docstring).
 INDENTERS = {"sphere": "hertz", "flat": "flat"}
 # The linear model's default resolution: in-plane nodes at most 1 / NODES_PER_DEPTH of the
@@ -261,6 +278,8 @@ class SkinScene(AbstractScene):
     unmagnetised layer (an eFlesh-like skin), or None for a magnetised layer.
     ``soft``: fixed soft-magnetic parts near the skin (nearby iron, ``[[soft]]``), magnetised
     by the skin's field under each load (:func:`~magdesign.scene.pose.soft_parts_field`).
+    ``material`` (static): "linear" or "neo_hookean" (the press from the finite-strain layer,
+    of ``shear_modulus`` and ``bulk_modulus`` (Pa); module docstring).
     """
 
     thickness: Float[Array, ""]
@@ -286,8 +305,14 @@ class SkinScene(AbstractScene):
     indenter: str = eqx.field(static=True, default="sphere")
     soft: tuple[SoftPart, ...] = ()
     period: Float[Array, ""] | None = None
+    material: str = eqx.field(static=True, default="linear")
+    bulk_modulus: Float[Array, ""] | None = None
 
     def __post_init__(self):
+        if self.material not in LAYER_MATERIALS:
+            raise ValueError(f"material must be one of {LAYER_MATERIALS}, got {self.material!r}")
+        if self.material == "neo_hookean" and (self.bulk_modulus is None or self.indenter != "sphere"):
+            raise ValueError("a neo_hookean layer needs its bulk_modulus and a sphere (indenter 'sphere')")
         if self.field not in FIELD_MODELS:
             raise ValueError(f"field must be one of {FIELD_MODELS}, got {self.field!r}")
         if self.indenter not in INDENTERS:
@@ -321,6 +346,7 @@ class SkinScene(AbstractScene):
         "background_force_error": "N",
         "saturation_ratio": "1",
         "saturation_force": "N",
+        MECHANICS_CONVERGED: "1",
     }
 
     @property
@@ -359,13 +385,77 @@ class SkinScene(AbstractScene):
         return positions, jnp.broadcast_to(jnp.eye(3), (positions.shape[0], 3, 3))
 
     def displacement(self, loads: Loads):
+        """The load states (x, y, Fn, F_x, F_y) (m, m, N, N, N), (n, 5), and whether the
+        mechanics carries each (n,): always the linear layer; the neo_hookean layer where
+        the Newton solve of its press at that Fn converged (the field is NaN where not)."""
         state = jnp.concatenate([loads.contact, loads.normal[:, None], loads.shear], axis=-1)
-        return state, jnp.ones(state.shape[0], dtype=bool)
+        if self.material == "linear":
+            return state, jnp.ones(state.shape[0], dtype=bool)
+        return state, self._press_converged(loads.normal)
+
+    def _press_converged(self, normal_force):
+        """Whether the finite-strain layer's press converged under each ``normal_force`` (N, (...,))."""
+        return press_converged(
+            normal_force,
+            sphere_radius=self.sphere_radius,
+            thickness=self.thickness,
+            material=NeoHookean(mu=self.shear_modulus, bulk=self.bulk_modulus),
+            force_floor=CONTACT_FORCE_FLOOR,
+        )
 
     def layer(self) -> ElasticLayer:
         return ElasticLayer(
             thickness=self.thickness, shear_modulus=self.shear_modulus, poisson_ratio=self.poisson_ratio
         )
+
+    def layer_motion_grid(self, load: SurfaceLoad, cells, grid, levels=None):
+        """Displacement u (m) and rotation curl(u) / 2 (rad), each (n_x, n_y, n_z, 3), at the
+        centres of the layer's ``cells`` (or at ``levels``) under ``load``
+        (:func:`~magdesign.mechanics.skin_layer.layer_displacement_grid`'s arguments): the
+        linear layer's, or with the neo_hookean material the finite-strain layer's press plus
+        the linear layer's shear (module docstring)."""
+        u, rotation = layer_displacement_grid(
+            layer=self.layer(), load=self._linear_part(load), size=self.size, cells=cells, grid=grid, levels=levels
+        )
+        if self.material == "linear":
+            return u, rotation
+        nx, ny, nz = cells
+        side = self.size / jnp.array([nx, ny])
+        x = (jnp.arange(nx) + 0.5) * side[0] - 0.5 * self.size[0]
+        y = (jnp.arange(ny) + 0.5) * side[1] - 0.5 * self.size[1]
+        heights = (np.arange(nz) + 0.5) / nz if levels is None else np.asarray(levels, dtype=float)
+        z = jnp.asarray(heights) * self.thickness
+        points = jnp.stack(jnp.meshgrid(x, y, z, indexing="ij"), axis=-1)
+        du, drotation = self._press(points, load)
+        return u + du, rotation + drotation
+
+    def layer_motion(self, points, load: SurfaceLoad):
+        """Displacement u (m), (..., 3), at ``points`` (..., 3) of the layer under ``load``
+        (:func:`~magdesign.mechanics.skin_layer.layer_displacement`'s): as :meth:`layer_motion_grid`."""
+        u = layer_displacement(points, layer=self.layer(), load=self._linear_part(load))
+        return u if self.material == "linear" else u + self._press(points, load)[0]
+
+    def _linear_part(self, load: SurfaceLoad) -> SurfaceLoad:
+        """The part of ``load`` that the linear layer carries: all of it, or its shear alone
+        where the finite-strain layer carries the press."""
+        if self.material == "linear":
+            return load
+        return eqx.tree_at(lambda l: l.normal_force, load, jnp.zeros_like(load.normal_force))
+
+    def _press(self, points, load: SurfaceLoad):
+        """The finite-strain layer's (u, rotation) at ``points`` (..., 3) under the load's
+        normal force (NaN where its solve did not converge)."""
+        material = NeoHookean(mu=self.shear_modulus, bulk=self.bulk_modulus)
+        u, rotation, converged = press_field(
+            points,
+            centre=load.centre,
+            normal_force=load.normal_force,
+            sphere_radius=self.sphere_radius,
+            thickness=self.thickness,
+            material=material,
+            force_floor=CONTACT_FORCE_FLOOR,
+        )
+        return jnp.where(converged, u, jnp.nan), jnp.where(converged, rotation, jnp.nan)
 
     def contact_radius(self, normal_force: Float[Array, "..."], *, xp=jnp) -> Float[Array, "..."]:
         """The contact patch's radius a (m) under ``normal_force`` (N, (...,)), shape
@@ -429,9 +519,7 @@ class SkinScene(AbstractScene):
         if resolution != self.resolution:
             grid = band_limited_grid(tuple(factor * p for p in grid.periods), resolution[2])
         heights, _ = gauss_levels(resolution[2])
-        u, rotation = layer_displacement_grid(
-            layer=self.layer(), load=load, size=self.size, cells=resolution, grid=grid, levels=tuple(heights)
-        )
+        u, rotation = self.layer_motion_grid(load, resolution, grid, tuple(heights))
         return layer_field(
             points,
             size=self.size,
@@ -474,16 +562,14 @@ class SkinScene(AbstractScene):
             moved, turned = moved_cells(
                 self.magnets.centres,
                 self.polarization * self.magnets.directions,
-                lambda x: layer_displacement(x, layer=self.layer(), load=load),
+                lambda x: self.layer_motion(x, load),
             )
         else:
             centres, dimension = layer_cells(size=self.size, thickness=self.thickness, cells=self.cells)
             polarization = jnp.broadcast_to(self.polarization * jnp.asarray(self.direction), centres.shape)
             if self.period is not None:
                 polarization = pattern(centres[:, 0], self.period, polarization[0])
-            u, rotation = layer_displacement_grid(
-                layer=self.layer(), load=load, size=self.size, cells=self.cells, grid=self.spectral
-            )
+            u, rotation = self.layer_motion_grid(load, self.cells, self.spectral)
             moved, turned = carried_cells(centres, polarization, u.reshape(-1, 3), rotation.reshape(-1, 3))
         return cells_field(points, centres=moved, dimension=dimension, polarization=turned)
 
@@ -600,6 +686,13 @@ class SkinScene(AbstractScene):
         variance = jnp.diagonal(bounds.covariance, axis1=-2, axis2=-1)  # (M, 5)
         localisation = jnp.sqrt(variance[:, 0] + variance[:, 1])
         correlation = bounds.covariance[:, 2, 3:5] / jnp.sqrt(variance[:, 2:3] * variance[:, 3:5])
+        saturation = self.saturation_force(result.loads)
+        converged = jnp.all(result.converged)
+        if self.material != "linear":
+            # saturation_force's search presses harder than the sweep: a press the layer does not
+            # carry on its way leaves it NaN, which mechanics_converged then says
+            held = jax.lax.stop_gradient(saturation)
+            converged = converged & jnp.isfinite(held) & self._press_converged(held)
         return {
             "localisation_worst": jnp.max(localisation),
             "localisation_median": jnp.median(localisation),
@@ -610,5 +703,6 @@ class SkinScene(AbstractScene):
             "crosstalk": jnp.max(jnp.abs(correlation)),
             "background_force_error": jnp.max(jnp.abs(background)),
             "saturation_ratio": self.chip_range().ratio(self.transduce(result.chip_field)),
-            "saturation_force": self.saturation_force(result.loads),
+            "saturation_force": saturation,
+            MECHANICS_CONVERGED: converged.astype(float),
         }

@@ -391,10 +391,12 @@ def _keys():
             "mechanics.material",
             "choice",
             "the elastomer's constitutive law",
+            default=D("required for a dome; 'linear' for a skin"),
             choices={
-                "mooney_rivlin": "Mooney-Rivlin (c10, c01)",
-                "neo_hookean": "neo-Hookean (shear_modulus, bulk_modulus)",
-                "linear": "linear elastic (youngs_modulus, poisson_ratio)",
+                "mooney_rivlin": "Mooney-Rivlin (c10, c01; a dome's)",
+                "neo_hookean": "neo-Hookean (shear_modulus, bulk_modulus; a skin's: the press at finite strain)",
+                "linear": "linear elastic (a dome's: youngs_modulus, poisson_ratio; a skin's: shear_modulus, "
+                "poisson_ratio)",
             },
         ),
         Key("mechanics.c10", q, "Mooney-Rivlin constant C10", "Pa", R, POSITIVE, MODULUS),

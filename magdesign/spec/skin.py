@@ -15,6 +15,7 @@ from magdesign.scene.skin_scene import (
     CONTACT_FORCE_FLOOR,
     FIELD_MODELS,
     INDENTERS,
+    LAYER_MATERIALS,
     NODES_PER_PERIOD,
     SkinMagnets,
     SkinScene,
@@ -143,6 +144,9 @@ def check_contact_strain(scene, loads):
     Names load.normal (load.shear_x / shear_y where the shear's travel is the larger part),
     mechanics.shear_modulus and the indenter."""
     normals, shears = np.asarray(loads.normal, dtype=float), np.asarray(loads.shear, dtype=float)
+    if scene.material == "neo_hookean":
+        check_shear_strain(scene, normals, shears)
+        return
     travels = scene.contact_strain(normals, shears, xp=np)
     nu = float(scene.poisson_ratio)
     # which travel dominates: the depth's 2 (1 - nu) Fn or the shear's (2 - nu) |F_t|
@@ -176,6 +180,47 @@ def check_contact_strain(scene, loads):
         PlausibilityWarning,
         stacklevel=2,  # at one place whoever builds the scene: the command says it once
     )
+
+
+def check_shear_strain(scene, normals, shears):
+    """A neo_hookean layer's :func:`check_contact_strain`: its press is finite-strain, its
+    shear the linear layer's, superposed; warn where the shear's own strain under the
+    contact (:meth:`~magdesign.scene.skin_scene.SkinScene.contact_strain` of the shear
+    alone, on the press's patch) exceeds SKIN_STRAIN_LIMIT at a press of CONTACT_FORCE_FLOOR or more."""
+    # contact_strain's tangential part alone, on the press's patch: 3 (2 - nu) |F_t| / (16 G a^2)
+    radii, nu = scene.contact_radius(normals, xp=np), float(scene.poisson_ratio)
+    travel = 3.0 * (2.0 - nu) * np.hypot(shears[..., 0], shears[..., 1]) / (16.0 * float(scene.shear_modulus))
+    strains = np.where(normals >= CONTACT_FORCE_FLOOR, travel / radii**2, 0.0)
+    worst = int(np.argmax(strains))
+    if not strains[worst] > SKIN_STRAIN_LIMIT:
+        return
+    shear = shears[worst]
+    key = "load.shear_x" if abs(shear[0]) >= abs(shear[1]) else "load.shear_y"
+    warnings.warn(
+        f"{key}: at {float(normals[worst]):g} N (shear ({shear[0]:g}, {shear[1]:g}) N) the shear's own strain under "
+        f"the contact is {float(strains[worst]):.2g} (its travel over the contact radius): above "
+        f"{SKIN_STRAIN_LIMIT:g}; the neo_hookean layer (mechanics.material) carries the press at finite strain but "
+        "the shear as the linear layer does, superposed on it, so the shear's part of the displacement may be off "
+        "by about that strain (a smaller shear, a stiffer layer or a larger sphere lowers it)",
+        PlausibilityWarning,
+        stacklevel=3,
+    )
+
+
+def _neo_hookean_layer(mechanics, shear_modulus):
+    """(Poisson's ratio of the linear shear part, bulk modulus K (Pa)) of a neo_hookean
+    layer's [mechanics] table: K read, nu = (3 K - 2 mu) / (2 (3 K + mu)) derived."""
+    if mechanics.has("poisson_ratio"):
+        raise SpecError(
+            "mechanics.poisson_ratio: a neo_hookean layer (mechanics.material) takes bulk_modulus (Pa) instead; its "
+            "Poisson's ratio (3 K - 2 mu) / (2 (3 K + mu)) follows from the two moduli"
+        )
+    bulk = mechanics.quantity("bulk_modulus", "Pa")
+    if not bulk > 0.0:
+        raise SpecError(f"mechanics.bulk_modulus: {bulk:g} Pa; expected a bulk modulus above 0 Pa")
+    if not shear_modulus > 0.0:
+        raise SpecError(f"mechanics.shear_modulus: {shear_modulus:g} Pa; expected a shear modulus above 0 Pa")
+    return (3.0 * bulk - 2.0 * shear_modulus) / (2.0 * (3.0 * bulk + shear_modulus)), bulk
 
 
 def _skin_chips(sensor):
@@ -291,7 +336,9 @@ def skin_scene(spec, fidelity):
     """The :class:`~magdesign.scene.skin_scene.SkinScene` of a spec (magnet.shape = "skin"),
     or a SpecError naming the key."""
     if fidelity is not None:
-        raise SpecError(f"fidelity: the skin has one mechanics model (a bonded linear layer), got {fidelity!r}")
+        raise SpecError(
+            f"fidelity: the skin has one mechanics model (a bonded layer, mechanics.material), got {fidelity!r}"
+        )
     for name in ("geometry", "inductors", "pole"):
         if name in spec:
             raise SpecError(f"[{name}]: a skin reads no [{name}] table (its layer lies on the board at z = 0)")
@@ -304,7 +351,17 @@ def skin_scene(spec, fidelity):
     thickness = mechanics.quantity("thickness", "m")
     size = mechanics.quantities("size", "m", length=2)
     shear_modulus = mechanics.quantity("shear_modulus", "Pa")
-    poisson_ratio = mechanics.quantity("poisson_ratio", "1")
+    material = mechanics.choice("material", LAYER_MATERIALS, default="linear")
+    bulk_modulus = None
+    if material == "neo_hookean":
+        poisson_ratio, bulk_modulus = _neo_hookean_layer(mechanics, shear_modulus)
+    else:
+        if mechanics.has("bulk_modulus"):
+            raise SpecError(
+                'mechanics.bulk_modulus: a linear layer (mechanics.material = "linear", the default) takes '
+                'poisson_ratio; set mechanics.material = "neo_hookean" for shear_modulus and bulk_modulus'
+            )
+        poisson_ratio = mechanics.quantity("poisson_ratio", "1")
     mechanics.done()
     magnets = _skin_magnets(magnet, direction, size, thickness)
     period, direction = _skin_period(magnet, direction)
@@ -332,6 +389,17 @@ def skin_scene(spec, fidelity):
     radius = indenter.quantity("radius", "m")
     indenter_shape = indenter.choice("shape", tuple(INDENTERS), default="sphere")
     indenter.done()
+    if material == "neo_hookean" and indenter_shape != "sphere":
+        raise SpecError(
+            'indenter.shape: the neo_hookean layer (mechanics.material) is pressed by a sphere only; got "flat" '
+            '(the flat punch presses the linear layer: mechanics.material = "linear")'
+        )
+    if material == "neo_hookean" and (magnets is None and field == "linear"):
+        raise SpecError(
+            'mechanics.material: the neo_hookean layer\'s press moves the rigid cells (magnet.field = "cells") or '
+            'the discrete magnets ([[magnet.magnets]]); the linear field (magnet.field = "linear", the default) '
+            "takes the linear layer's band-limited displacement, which the finite-strain press does not give"
+        )
     sensor = Table(spec, "sensor")
     sensor.choice("model", ("hall3d",))
     hall = _hall(sensor)
@@ -397,4 +465,6 @@ def skin_scene(spec, fidelity):
         indenter=indenter_shape,
         soft=soft,
         period=None if period is None else on_device(period),
+        material=material,
+        bulk_modulus=None if bulk_modulus is None else on_device(bulk_modulus),
     )

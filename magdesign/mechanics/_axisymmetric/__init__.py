@@ -1,6 +1,8 @@
 """Finite-strain axisymmetric model of a thick hemispherical dome pressed by a flat plate:
 the mesh (:mod:`.mesh`), the equilibrium of one load (:mod:`.equilibrium`) and the
-force-travel path (:mod:`.path`); the module docstrings say how each works."""
+force-travel path (:mod:`.path`); and of a layer on a rigid base pressed by a sphere
+(:mod:`.layer_mesh`, solved by :mod:`magdesign.mechanics.finite_layer`); the module
+docstrings say how each works."""
 
 from magdesign.mechanics._axisymmetric.equilibrium import (
     LEVENBERG_MAX,

@@ -1,6 +1,14 @@
 """The equilibrium of the axisymmetric dome under one load: its energy, tangent, Newton
 solve and implicit derivatives (the mesh: :mod:`.mesh`).
 
+Bodies. Every function here takes the mesh, which says what it meshes: its element and edge
+arrays of a state (``mesh.parts(params, y)``), its contact's energy per edge
+(``mesh.edge_energy(X_edge, edge_values, *mesh.contact_args(params))``) and its fixed
+unknowns (``mesh.free_u``). The dome's :class:`.mesh.Mesh` is a wall under a flat plate;
+:class:`.layer_mesh.LayerMesh` a layer on a rigid base under a sphere, which the same
+elements, tangent, Newton solve and implicit derivatives serve (params = (a length, the
+thickness, material) for both: the tolerance and the penalty read params[1] and params[2]).
+
 Kinematics. F = [[dr/dR, dr/dZ, 0], [dz/dR, dz/dZ, 0], [0, 0, (R + u_r) / R]] in
 (r, z, theta) order, evaluated at 3 x 3 Gauss points, which never lie on the axis. Its five
 non-zero entries are affine in the element's 18 nodal displacements: F5 = F_rest + H5,
@@ -52,13 +60,9 @@ import numpy as np
 from jax import lax
 
 from magdesign import _newton
-from magdesign._numerics import (
-    CONTACT_SMOOTHING,
-    smooth_ramp,
-)
 from magdesign._tracing import traced_once
 from magdesign.mechanics import _blocks
-from magdesign.mechanics._axisymmetric.mesh import _DN, _EDGE_DN, _EDGE_N, _EDGE_W, _N, _P, _W
+from magdesign.mechanics._axisymmetric.mesh import _DN, _EDGE_N, _N, _P, _W
 from magdesign.mechanics.materials import isochoric_excess
 
 # Solver thresholds of the axisymmetric dome.
@@ -90,11 +94,6 @@ DOME_ENERGY_RESOLUTION = 1e-9
 DOME_LEVENBERG_START = 1e-6
 
 
-# Penalty stiffness of the contact, kappa t / mu: the penetration it leaves is a 1/1000 of
-# the wall's own compression p t / E under the contact pressure p, a small part of the
-# plate travel itself (measured below 1e-4 of it, see tests/mechanics/test_dome.py);
-# stiffer penalties only slow Newton down.
-CONTACT_PENALTY = 1000.0
 # Newton iterations of one solve at most: a force-held solve or a path's first step, and
 # any later step of a path (a step that needs more is retried at a quarter of its length).
 NEWTON_MAX_ITER = 40
@@ -195,44 +194,15 @@ def _element_derivatives(X, u, material, with_hessian=True):
     return gradient, hessian
 
 
-def _penalty(params):
-    """Contact penalty stiffness kappa (Pa/m): CONTACT_PENALTY mu / t."""
-    _, thickness, material = params
-    return CONTACT_PENALTY * material.shear_modulus / thickness
-
-
-def _edge_energy(X_edge, z_and_d, outer_radius, kappa, width):
-    """Penalty energy (J) of one outer edge: X_edge (3, 2) reference (R, Z) of its nodes,
-    z_and_d (4,) their u_z (m) and the plate travel d (m)."""
-    R = _EDGE_N @ X_edge[:, 0]
-    ds = jnp.linalg.norm(_EDGE_DN @ X_edge, axis=-1)
-    penetration = _EDGE_N @ (X_edge[:, 1] + z_and_d[:3]) - (outer_radius - z_and_d[3])
-    ramp = smooth_ramp(penetration, width)
-    return jnp.sum(_EDGE_W * ds * 2 * jnp.pi * R * kappa / 2 * ramp**2)
-
-
-def _parts(mesh, params, y):
-    """Per-element (X (9, 2), u (18,)) and per-edge (X (3, 2), (u_z, d) (4,)) arrays."""
-    outer_radius, thickness, _ = params
-    X = mesh.reference(outer_radius, thickness)
-    u = y[:-1] * mesh.free_u
-    full = jnp.append(u, y[-1])
-    return X[mesh.elem_nodes], full[mesh.elem_dofs], X[mesh.edge_nodes], full[mesh.edge_dofs]
-
-
-def _contact_args(mesh, params):
-    outer_radius, thickness, _ = params
-    return outer_radius, _penalty(params), CONTACT_SMOOTHING * thickness
-
-
 def potential(mesh, y, params, force=0.0):
     """Total potential (J) of state y: elastic + contact energy - force d.
 
     params = (outer_radius (m), thickness (m), material); force (N).
     """
-    X_elem, u_elem, X_edge, z_edge = _parts(mesh, params, y)
+    X_elem, u_elem, X_edge, z_edge = mesh.parts(params, y)
     elastic = jax.vmap(_element_energy, (0, 0, None))(X_elem, u_elem, params[2])
-    contact = jax.vmap(_edge_energy, (0, 0) + (None,) * 3)(X_edge, z_edge, *_contact_args(mesh, params))
+    args = mesh.contact_args(params)
+    contact = jax.vmap(mesh.edge_energy, (0, 0) + (None,) * len(args))(X_edge, z_edge, *args)
     return jnp.sum(elastic) + jnp.sum(contact) - force * y[-1]
 
 
@@ -243,17 +213,17 @@ def derivatives(mesh, y, params, with_hessian=True):
     (their rows and columns 0).
 
     The last gradient entry, dPi / dd, is the plate force (N)."""
-    X_elem, u_elem, X_edge, z_edge = _parts(mesh, params, y)
+    X_elem, u_elem, X_edge, z_edge = mesh.parts(params, y)
     element = functools.partial(_element_derivatives, with_hessian=with_hessian)
     g_elem, H_elem = jax.vmap(element, (0, 0, None))(X_elem, u_elem, params[2])
-    contact = (X_edge, z_edge) + _contact_args(mesh, params)
-    in_axes = (0, 0) + (None,) * 3
-    g_edge = jax.vmap(jax.grad(_edge_energy, argnums=1), in_axes)(*contact)
+    contact = (X_edge, z_edge) + mesh.contact_args(params)
+    in_axes = (0, 0) + (None,) * (len(contact) - 2)
+    g_edge = jax.vmap(jax.grad(mesh.edge_energy, argnums=1), in_axes)(*contact)
     g = _blocks.gather_sum(mesh.gradient_tables, jnp.concatenate([g_elem.ravel(), g_edge.ravel()]))
     g = g.at[-1].set(jnp.sum(g_edge[:, -1]))
     if not with_hessian:
         return g, None
-    H_edge = jax.vmap(jax.hessian(_edge_energy, argnums=1), in_axes)(*contact)
+    H_edge = jax.vmap(jax.hessian(mesh.edge_energy, argnums=1), in_axes)(*contact)
     flat = _blocks.gather_sum(mesh.hessian_tables, jnp.concatenate([H_elem.ravel(), H_edge.ravel()]))
     return g, _blocks.Blocks.from_flat(mesh.layout, flat, jnp.sum(H_edge[:, -1, -1]))
 
@@ -267,7 +237,7 @@ def contact_radius(mesh, y, params):
     """Largest current radius (m) of an outer-surface Gauss point pressed into the plate
     (0 if none): where the contact ends. Not differentiable (held constant)."""
     y, params = lax.stop_gradient((y, params))
-    _, _, X_edge, z_edge = _parts(mesh, params, y)
+    _, _, X_edge, z_edge = mesh.parts(params, y)
     u_r = (y[:-1] * mesh.free_u).reshape(-1, 2)[mesh.edge_nodes, 0]
     r = (X_edge[..., 0] + u_r) @ _EDGE_N.T  # (edges, 3 points)
     z = (X_edge[..., 1] + z_edge[:, :3]) @ _EDGE_N.T

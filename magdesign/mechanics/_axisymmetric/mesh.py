@@ -12,10 +12,17 @@ small elements at the apex, where a light load bends the wall over a short lengt
 import jax.numpy as jnp
 import numpy as np
 
+from magdesign._numerics import CONTACT_SMOOTHING, smooth_ramp
 from magdesign.mechanics import _blocks
 
 # Grading exponent of the meridian mesh (element boundaries at (pi / 2) s^GRADING).
 GRADING = 2.0
+
+# Penalty stiffness of the contact, kappa t / mu: the penetration it leaves is a 1/1000 of
+# the wall's own compression p t / E under the contact pressure p, a small part of the
+# plate travel itself (measured below 1e-4 of it, see tests/mechanics/test_dome.py);
+# stiffer penalties only slow Newton down.
+CONTACT_PENALTY = 1000.0
 
 _GAUSS3 = np.polynomial.legendre.leggauss(3)
 
@@ -61,17 +68,7 @@ class Mesh:
 
     def __init__(self, n_wall: int, n_meridian: int, base: str, grading: float = GRADING):
         self.n_wall, self.n_meridian = n_wall, n_meridian
-        self.rows, self.cols = 2 * n_meridian + 1, 2 * n_wall + 1
-        self.n_dof = 2 * self.rows * self.cols
-        self.size = self.n_dof + 1
-        node = np.arange(self.rows * self.cols).reshape(self.rows, self.cols)
-        a, b = np.arange(n_meridian), np.arange(n_wall)
-        rows = 2 * a[:, None, None, None] + np.arange(3)[:, None]  # (n_mer, 1, 3, 1)
-        cols = 2 * b[None, :, None, None] + np.arange(3)[None, :]  # (1, n_wall, 1, 3)
-        elem_nodes = node[rows, cols].reshape(n_meridian * n_wall, 9)
-        self.elem_nodes = elem_nodes  # (n_elem, 9), local node (a, b) at 3 a + b
-        self.elem_dofs = (2 * elem_nodes[:, :, None] + np.arange(2)).reshape(-1, 18)
-        self.edge_nodes = node[:, -1][2 * a[:, None] + np.arange(3)]  # (n_mer, 3) outer edges
+        grid_tables(self, n_meridian, n_wall)
         # each edge's unknowns: the u_z of its three nodes, then the plate travel
         self.edge_dofs = np.concatenate([2 * self.edge_nodes + 1, np.full((n_meridian, 1), self.n_dof)], axis=1)
         free = np.ones((self.rows, self.cols, 2))
@@ -92,11 +89,58 @@ class Mesh:
         """1 for the unknowns of a solve, 0 for held values: (n_dof + 1,)."""
         return np.append(self.free_u, 1.0 if force_control else 0.0)
 
+    def parts(self, params, y):
+        """Per-element (X (9, 2), u (18,)) and per-edge (X (3, 2), (u_z, d) (4,)) arrays
+        of state y; params = (outer_radius (m), thickness (m), material)."""
+        outer_radius, thickness, _ = params
+        return element_parts(self, self.reference(outer_radius, thickness), y)
+
+    def contact_args(self, params):
+        """(outer radius (m), penalty kappa (Pa/m), ramp width (m)): :meth:`edge_energy`'s."""
+        _, thickness, material = params
+        return params[0], CONTACT_PENALTY * material.shear_modulus / thickness, CONTACT_SMOOTHING * thickness
+
+    @staticmethod
+    def edge_energy(X_edge, z_and_d, outer_radius, kappa, width):
+        """Penalty energy (J) of one outer edge against the plate at z = R_o - d: X_edge
+        (3, 2) reference (R, Z) of its nodes, z_and_d (4,) their u_z (m) and the plate travel d (m)."""
+        R = _EDGE_N @ X_edge[:, 0]
+        ds = jnp.linalg.norm(_EDGE_DN @ X_edge, axis=-1)
+        penetration = _EDGE_N @ (X_edge[:, 1] + z_and_d[:3]) - (outer_radius - z_and_d[3])
+        ramp = smooth_ramp(penetration, width)
+        return jnp.sum(_EDGE_W * ds * 2 * jnp.pi * R * kappa / 2 * ramp**2)
+
     def reference(self, outer_radius, thickness):
         """Reference nodal coordinates (rows cols, 2): (R, Z) in m."""
         rho = outer_radius - thickness + thickness * np.arange(self.cols) / (self.cols - 1)
         X = jnp.stack([rho[None, :] * np.sin(self.phi)[:, None], rho[None, :] * np.cos(self.phi)[:, None]], -1)
         return X.reshape(-1, 2)
+
+
+def grid_tables(mesh, n_rows, n_cols):
+    """Set the node tables of a grid of n_rows x n_cols 9-node elements on ``mesh``:
+    rows, cols (node rows 2 n_rows + 1 of 2 n_cols + 1 nodes), n_dof, size (n_dof + the
+    load's unknown), elem_nodes (n_elem, 9; local node (a, b) at 3 a + b), elem_dofs
+    (n_elem, 18) and edge_nodes (n_rows, 3): the edges along the last node column."""
+    mesh.rows, mesh.cols = 2 * n_rows + 1, 2 * n_cols + 1
+    mesh.n_dof = 2 * mesh.rows * mesh.cols
+    mesh.size = mesh.n_dof + 1
+    node = np.arange(mesh.rows * mesh.cols).reshape(mesh.rows, mesh.cols)
+    a, b = np.arange(n_rows), np.arange(n_cols)
+    rows = 2 * a[:, None, None, None] + np.arange(3)[:, None]  # (n_rows, 1, 3, 1)
+    cols = 2 * b[None, :, None, None] + np.arange(3)[None, :]  # (1, n_cols, 1, 3)
+    mesh.elem_nodes = node[rows, cols].reshape(n_rows * n_cols, 9)
+    mesh.elem_dofs = (2 * mesh.elem_nodes[:, :, None] + np.arange(2)).reshape(-1, 18)
+    mesh.edge_nodes = node[:, -1][2 * a[:, None] + np.arange(3)]
+
+
+def element_parts(mesh, X, y):
+    """Per-element (X (9, 2), u (18,)) and per-edge (X (3, 2), its edge_dofs' values)
+    arrays of state y, X (nodes, 2) the reference nodal coordinates (m); held
+    displacements enter as 0."""
+    u = y[:-1] * mesh.free_u
+    full = jnp.append(u, y[-1])
+    return X[mesh.elem_nodes], full[mesh.elem_dofs], X[mesh.edge_nodes], full[mesh.edge_dofs]
 
 
 def _assembly_tables(mesh):
