@@ -40,6 +40,7 @@ import pickle
 import re
 import sys
 import tempfile
+import threading
 import types
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -262,24 +263,30 @@ class _Program:
         memory (a ``Lowered`` and JAX's compilation memo answer with the executable read
         from the cache). The cache is turned off for the whole process meanwhile (JAX's
         switch is global, and JAX remembers its answer to "is the cache used" until
-        ``reset_cache``), then turned back as it was; the thread that calls a program is the
-        only one that compiles (:func:`load_ahead`'s threads deserialize)."""
+        ``reset_cache``), then turned back as it was, whatever fails on the way. One thread
+        at a time turns it off (_AFRESH), so that two threads compiling afresh cannot leave
+        it off; a program another thread compiles meanwhile only misses the cache."""
         body = self._body
 
         def afresh(*inner):
             return body(*inner)
 
         afresh.__name__ = afresh.__qualname__ = body.__name__  # the compiled program's name
-        saved = jax.config.jax_enable_compilation_cache, _tracing._errors["as_nan"]
-        jax.config.update("jax_enable_compilation_cache", False)
-        compilation_cache.reset_cache()
-        _tracing._errors["as_nan"] = as_nan
-        try:
-            return jax.jit(afresh, compiler_options=self._compiler_options).lower(*args).compile()
-        finally:
-            _tracing._errors["as_nan"] = saved[1]
-            jax.config.update("jax_enable_compilation_cache", saved[0])
-            compilation_cache.reset_cache()
+        with _AFRESH:
+            saved = jax.config.jax_enable_compilation_cache, _tracing._errors["as_nan"]
+            try:
+                jax.config.update("jax_enable_compilation_cache", False)
+                compilation_cache.reset_cache()
+                _tracing._errors["as_nan"] = as_nan
+                return jax.jit(afresh, compiler_options=self._compiler_options).lower(*args).compile()
+            finally:
+                _tracing._errors["as_nan"] = saved[1]
+                jax.config.update("jax_enable_compilation_cache", saved[0])
+                compilation_cache.reset_cache()
+
+
+# held while a program compiles with JAX's persistent cache turned off (_Program._compiled_afresh)
+_AFRESH = threading.Lock()
 
 
 def filter_jit(fn, name: str):
