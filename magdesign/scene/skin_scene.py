@@ -395,13 +395,17 @@ class SkinScene(AbstractScene):
 
     def _press_converged(self, normal_force):
         """Whether the finite-strain layer's press converged under each ``normal_force`` (N, (...,))."""
-        return press_converged(
-            normal_force,
-            sphere_radius=self.sphere_radius,
-            thickness=self.thickness,
-            material=NeoHookean(mu=self.shear_modulus, bulk=self.bulk_modulus),
-            force_floor=CONTACT_FORCE_FLOOR,
-        )
+        return press_converged(normal_force, **self._finite_layer())
+
+    def _finite_layer(self):
+        """The finite-strain layer's arguments of press_field and press_converged: the
+        sphere, the thickness, the neo-Hookean material and the force floor."""
+        return {
+            "sphere_radius": self.sphere_radius,
+            "thickness": self.thickness,
+            "material": NeoHookean(mu=self.shear_modulus, bulk=self.bulk_modulus),
+            "force_floor": CONTACT_FORCE_FLOOR,
+        }
 
     def layer(self) -> ElasticLayer:
         return ElasticLayer(
@@ -445,15 +449,8 @@ class SkinScene(AbstractScene):
     def _press(self, points, load: SurfaceLoad):
         """The finite-strain layer's (u, rotation) at ``points`` (..., 3) under the load's
         normal force (NaN where its solve did not converge)."""
-        material = NeoHookean(mu=self.shear_modulus, bulk=self.bulk_modulus)
         u, rotation, converged = press_field(
-            points,
-            centre=load.centre,
-            normal_force=load.normal_force,
-            sphere_radius=self.sphere_radius,
-            thickness=self.thickness,
-            material=material,
-            force_floor=CONTACT_FORCE_FLOOR,
+            points, centre=load.centre, normal_force=load.normal_force, **self._finite_layer()
         )
         return jnp.where(converged, u, jnp.nan), jnp.where(converged, rotation, jnp.nan)
 
@@ -469,7 +466,7 @@ class SkinScene(AbstractScene):
         return (3.0 * force * radius / (4.0 * e_star)) ** (1.0 / 3.0)
 
     def contact_strain(
-        self, normal_force: Float[Array, "..."], shear_force: Float[Array, "... 2"], *, xp=jnp
+        self, normal_force: Float[Array, "..."], shear_force: Float[Array, "... 2"], *, xp=jnp, press=True
     ) -> Float[Array, "..."]:
         """The strain under the contact (-), shape (...,): the displacement of the patch's
         centre, its depth delta and its tangential travel u_t, over the patch's radius a,
@@ -487,12 +484,13 @@ class SkinScene(AbstractScene):
 
         On a bonded layer the depth is smaller than the half-space's (by 7 % at a / h = 0.1,
         22 % at 0.3: :mod:`magdesign.mechanics.skin_layer`), so this overstates the strain
-        a little there. ``xp``: the array module (:meth:`chip_positions`)."""
+        a little there. ``xp``: the array module (:meth:`chip_positions`). ``press``: False
+        leaves the depth out, the tangential travel alone on the press's patch |u_t| / a."""
         radius = self.contact_radius(normal_force, xp=xp)
         g, nu = xp.asarray(self.shear_modulus), xp.asarray(self.poisson_ratio)
         shape = 1.5 if self.indenter == "sphere" else 1.0  # Hertz's centre over the flat punch's
         tangential = (2.0 - nu) * xp.asarray(shear_force, dtype=float)
-        normal = (2.0 * (1.0 - nu) * xp.asarray(normal_force, dtype=float))[..., None]
+        normal = ((2.0 * (1.0 - nu) if press else 0.0) * xp.asarray(normal_force, dtype=float))[..., None]
         travels = xp.concatenate([normal, tangential], axis=-1)
         # traced: a finite slope at rest too; numpy's numbers need no derivative
         travel = safe_norm(travels) if xp is jnp else np.linalg.norm(travels, axis=-1)

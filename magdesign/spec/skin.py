@@ -187,10 +187,8 @@ def check_shear_strain(scene, normals, shears):
     shear the linear layer's, superposed; warn where the shear's own strain under the
     contact (:meth:`~magdesign.scene.skin_scene.SkinScene.contact_strain` of the shear
     alone, on the press's patch) exceeds SKIN_STRAIN_LIMIT at a press of CONTACT_FORCE_FLOOR or more."""
-    # contact_strain's tangential part alone, on the press's patch: 3 (2 - nu) |F_t| / (16 G a^2)
-    radii, nu = scene.contact_radius(normals, xp=np), float(scene.poisson_ratio)
-    travel = 3.0 * (2.0 - nu) * np.hypot(shears[..., 0], shears[..., 1]) / (16.0 * float(scene.shear_modulus))
-    strains = np.where(normals >= CONTACT_FORCE_FLOOR, travel / radii**2, 0.0)
+    travels = scene.contact_strain(normals, shears, xp=np, press=False)
+    strains = np.where(normals >= CONTACT_FORCE_FLOOR, travels, 0.0)
     worst = int(np.argmax(strains))
     if not strains[worst] > SKIN_STRAIN_LIMIT:
         return
